@@ -1,0 +1,117 @@
+# Vehicle unit firmware: one entry point for building, running and testing.
+#
+#   make            build firmware library, simulator, tools and tests
+#   make run        firmware on the simulated plant, console on this terminal
+#   make check      build and run the whole test suite
+#   make clean      remove build/
+#   V=1             show full commands
+#   CC=, CROSS_COMPILE=, BUILD=, SANITIZE=1 respected
+
+BUILD ?= build
+CROSS_COMPILE ?=
+ifeq ($(origin CC),default)
+CC := $(CROSS_COMPILE)gcc
+endif
+AR := $(CROSS_COMPILE)ar
+PKG_CONFIG ?= pkg-config
+
+ifeq ($(V),1)
+Q :=
+else
+Q := @
+endif
+
+OPT ?= -O2
+WARN := -Wall -Wextra -Werror -Wmissing-prototypes -Wstrict-prototypes
+STRICT := -Wconversion -Wshadow -Wsign-conversion
+CFLAGS_BASE := -std=c11 $(OPT) -g $(WARN) -I. -MMD -MP
+HOST_DEFS := -D_GNU_SOURCE
+LDLIBS_HOST := -lexpat -lm
+
+ifeq ($(SANITIZE),1)
+CFLAGS_BASE += -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
+LDFLAGS += -fsanitize=address,undefined
+endif
+ifeq ($(COVERAGE),1)
+CFLAGS_BASE += --coverage -O0
+LDFLAGS += --coverage
+endif
+
+# Per-area flags: firmware/ is freestanding and held to the strict warnings,
+# proto/ too; host code may use libc and POSIX.
+CFLAGS_firmware := $(CFLAGS_BASE) $(STRICT) -ffreestanding
+CFLAGS_proto := $(CFLAGS_BASE) $(STRICT) $(HOST_DEFS)
+CFLAGS_hal := $(CFLAGS_BASE) $(HOST_DEFS)
+CFLAGS_host_sim := $(CFLAGS_BASE) $(HOST_DEFS)
+CFLAGS_tools := $(CFLAGS_BASE) $(HOST_DEFS)
+CFLAGS_tests := $(CFLAGS_BASE) $(HOST_DEFS) -Wno-missing-prototypes
+
+FW_SRC := $(wildcard firmware/*.c)
+PROTO_SRC := $(wildcard proto/*.c)
+HOST_SRC := $(wildcard hal/*.c)
+SIM_SRC := $(filter-out %_main.c,$(wildcard host_sim/*.c))
+TEST_SRC := $(wildcard tests/test_*.c)
+TEST_SUPPORT_SRC := $(filter-out tests/test_%,$(wildcard tests/*.c))
+
+objs = $(patsubst %.c,$(BUILD)/obj/%.o,$(1))
+
+FW_LIB := $(BUILD)/libfirmware.a
+PROTO_LIB := $(BUILD)/libproto.a
+HOST_LIB := $(BUILD)/libhost.a
+SIM_LIB := $(BUILD)/libsim.a
+TEST_SUPPORT_LIB := $(BUILD)/libtestsupport.a
+
+# Link order: most dependent first.
+HOST_LIBS := $(SIM_LIB) $(PROTO_LIB) $(HOST_LIB) $(FW_LIB)
+
+PROGRAMS := $(BUILD)/vehicle-sim
+TOOL_MAINS := $(wildcard tools/*_main.c)
+PROGRAMS += $(patsubst tools/%_main.c,$(BUILD)/%,$(TOOL_MAINS))
+TESTS := $(patsubst tests/%.c,$(BUILD)/tests/%,$(TEST_SRC))
+
+.PHONY: all run check clean bench format
+all: $(FW_LIB) $(PROGRAMS) $(TESTS)
+
+# Objects: the flags follow the top-level folder of the source.
+$(BUILD)/obj/%.o: %.c
+	@mkdir -p $(dir $@)
+	@$(if $(Q),echo "  CC      $<")
+	$(Q)$(CC) $(CFLAGS_$(firstword $(subst /, ,$<))) $(EXTRA_CFLAGS) -c $< -o $@
+
+$(FW_LIB): $(call objs,$(FW_SRC))
+$(PROTO_LIB): $(call objs,$(PROTO_SRC))
+$(HOST_LIB): $(call objs,$(HOST_SRC))
+$(SIM_LIB): $(call objs,$(SIM_SRC))
+$(TEST_SUPPORT_LIB): $(call objs,$(TEST_SUPPORT_SRC))
+$(BUILD)/%.a:
+	@mkdir -p $(dir $@)
+	@$(if $(Q),echo "  AR      $@")
+	$(Q)rm -f $@ && $(AR) rcs $@ $^
+
+$(BUILD)/vehicle-sim: $(call objs,host_sim/vehicle_sim_main.c) $(HOST_LIBS)
+	@$(if $(Q),echo "  LD      $@")
+	$(Q)$(CC) $(LDFLAGS) -o $@ $^ $(LDLIBS_HOST)
+
+$(BUILD)/%: $(BUILD)/obj/tools/%_main.o $(HOST_LIBS)
+	@$(if $(Q),echo "  LD      $@")
+	$(Q)$(CC) $(LDFLAGS) -o $@ $^ $(LDLIBS_HOST)
+
+$(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(TEST_SUPPORT_LIB) $(HOST_LIBS)
+	@mkdir -p $(dir $@)
+	@$(if $(Q),echo "  LD      $@")
+	$(Q)$(CC) $(LDFLAGS) -o $@ $^ -lcmocka $(LDLIBS_HOST) -lutil
+
+run: $(BUILD)/vehicle-sim
+	$(BUILD)/vehicle-sim --config config/vehicle.xml --io config/io.xml --realtime
+
+check: all
+	$(Q)tests/run_tests.sh $(BUILD) $(TESTS)
+
+format:
+	clang-format -i $(FW_SRC) $(PROTO_SRC) $(HOST_SRC) $(SIM_SRC) $(wildcard */*.h) \
+		$(TEST_SRC) $(TEST_SUPPORT_SRC) $(wildcard tools/*.c)
+
+clean:
+	rm -rf $(BUILD)
+
+-include $(shell find $(BUILD)/obj -name '*.d' 2>/dev/null)

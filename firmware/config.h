@@ -1,0 +1,88 @@
+/* Vehicle configuration handed to the firmware at init.
+ *
+ * Filled outside firmware/ (the XML loader in host_sim/, or a board's
+ * constant table) in physical units; vehicle_init() validates it again and
+ * converts it once to the fixed-point parameters the tick uses.
+ */
+#ifndef VS_CONFIG_H
+#define VS_CONFIG_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#define VS_MAX_AXES 4
+#define VS_MAX_IO 32
+#define VS_IO_NAME_MAX 24
+
+typedef enum {
+	VS_KIN_DIFF = 0, /* two-wheel differential: axis 0 left, axis 1 right */
+	VS_KIN_OMNI = 1, /* four-wheel mecanum: 0 front-left, 1 front-right,
+			    2 rear-left, 3 rear-right */
+} vs_kinematics_t;
+
+typedef enum { VS_IO_IN = 0, VS_IO_OUT = 1 } vs_io_dir_t;
+
+/* One io.xml entry as the firmware sees it: the id and its shape. The line
+ * mapping (chip, offsets, active-low) stays with the HAL backend. */
+typedef struct {
+	uint32_t id;    /* 1.. ; 0 is reserved for the unit itself */
+	uint8_t dir;    /* vs_io_dir_t */
+	uint8_t width;  /* value bits, 1..32 */
+	char name[VS_IO_NAME_MAX];
+} vs_io_def_t;
+
+typedef struct {
+	vs_kinematics_t kinematics;
+	uint32_t tick_hz; /* control tick rate, 100..10000, default 1000 */
+
+	/* Geometry and sensing. */
+	double wheel_diameter_mm;
+	double track_width_mm;  /* differential: wheel to wheel; mecanum: left to right */
+	double wheel_base_mm;   /* mecanum: front to rear axle; unused on differential */
+	uint32_t encoder_counts_per_rev; /* per wheel revolution, after quadrature */
+
+	/* Limits (getVelocityLimit / getAccelerationLimit) and start-up values. */
+	double vel_limit_t_mm_s, vel_limit_r_deg_s;
+	double acc_limit_t_mm_s2, acc_limit_r_deg_s2;
+	double vel_default_t_mm_s, vel_default_r_deg_s;
+	double acc_default_t_mm_s2, acc_default_r_deg_s2;
+	uint16_t jog_timeout_default_ms;
+
+	/* Wheel position loop and supervision. */
+	double wheel_kp_per_s;         /* position loop gain, 1/s */
+	double following_error_mm;     /* measured vs commanded wheel travel */
+	uint32_t encoder_stuck_ms;     /* commanded motion with no encoder change */
+	uint32_t drive_timeout_ms;     /* drive replies missing this long: fault */
+
+	/* Cruise blending: how far the curve may start before a waypoint. */
+	double cruise_blend_mm;
+	/* Caution speed cap while the obstacle-warning input is active (0 = none). */
+	double caution_vel_t_mm_s;
+
+	/* Battery, in volts. */
+	double battery_low_v, battery_critical_v;
+
+	/* Which optional devices this unit has. */
+	bool has_contact_sensor, has_obstacle_input, has_estop, has_joystick;
+	double joystick_deadband; /* fraction of full scale, 0..0.5 */
+
+	const char *firmware_version; /* "Ver.x.y.z"; NULL: built-in */
+
+	uint8_t num_io;
+	vs_io_def_t io[VS_MAX_IO];
+} vs_config_t;
+
+/* Number of wheel axes for a kinematics type. */
+static inline uint8_t vs_config_axes(const vs_config_t *c)
+{
+	return c->kinematics == VS_KIN_OMNI ? 4 : 2;
+}
+
+/* Fills a configuration with the reference differential base's values. */
+void vs_config_defaults(vs_config_t *c);
+
+/* Checks ranges and consistency. Returns 0 when valid, otherwise a negative
+ * number and writes the offending field's name to *field. */
+int vs_config_check(const vs_config_t *c, const char **field);
+
+#endif

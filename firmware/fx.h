@@ -1,0 +1,69 @@
+/* Fixed-point arithmetic for the motion core.
+ *
+ * One format serves every linear and angular quantity: Q32.32 in an int64_t
+ * (value = raw / 2^32). Lengths are millimetres (_mm), angles are degrees
+ * (_deg); per-tick rates carry _pt (per tick) or _pt2 (per tick squared).
+ * At 1 kHz, 1 mm/s^2 is 1e-6 mm/tick^2 = 4295 raw units, so the coarsest
+ * acceleration a user can set is still resolved to 0.03 %. The integer range
+ * (+-2^31 mm = +-2147 km) covers any floor a base drives on.
+ *
+ * Trigonometry uses a 32-bit binary angle (2^32 = one turn) so wrap-around
+ * is free, and returns Q30 in an int32_t.
+ */
+#ifndef FX_H
+#define FX_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+typedef int64_t q32_t;
+
+#define FX_SHIFT 32
+#define FX_ONE ((q32_t)1 << FX_SHIFT)
+#define FX_Q30_ONE ((int32_t)1 << 30)
+#define FX_DEG_180 ((q32_t)180 << FX_SHIFT)
+#define FX_DEG_360 ((q32_t)360 << FX_SHIFT)
+
+/* Integer part to Q32. */
+static inline q32_t fx_from_int(int32_t v) { return (q32_t)((uint64_t)(int64_t)v << FX_SHIFT); }
+
+/* (a * b) >> 30 for a Q32 (or any int64) and a Q30 factor, rounded to nearest,
+ * without a 128-bit intermediate (two 32x32->64 products, cheap on Cortex-M4). */
+int64_t fx_mul_q30(int64_t a, int32_t b_q30);
+
+/* (a * b) >> 32 for two Q32 values, rounded to nearest; saturates on overflow. */
+q32_t fx_mul(q32_t a, q32_t b);
+
+/* a * num / den with a 64-bit numerator product guarded: exact when |a*num|
+ * fits in 63 bits, otherwise computed in two steps. den > 0. Rounds toward 0. */
+int64_t fx_muldiv(int64_t a, int64_t num, int64_t den);
+
+/* Floor of the square root of a 64-bit unsigned value. */
+uint64_t fx_isqrt64(uint64_t v);
+
+/* Sine and cosine of a binary angle (2^32 per turn), Q30 result.
+ * Absolute error below 2e-9 (about 2 LSB of Q30). */
+int32_t fx_sin_bam(uint32_t bam);
+int32_t fx_cos_bam(uint32_t bam);
+
+/* Degrees (Q32) to binary angle, modulo one turn. */
+uint32_t fx_deg_to_bam(q32_t deg);
+
+/* atan2(y, x) as Q32 degrees in [-180, 180). y and x in any common scale. */
+q32_t fx_atan2_deg(int64_t y, int64_t x);
+
+/* Euclidean length of (x, y), both Q32; result Q32. */
+q32_t fx_hypot(q32_t x, q32_t y);
+
+/* Wrap a Q32 angle in degrees into [-180, 180). */
+q32_t fx_wrap_deg(q32_t deg);
+
+static inline int64_t fx_abs64(int64_t v) { return v < 0 ? -v : v; }
+static inline int64_t fx_min64(int64_t a, int64_t b) { return a < b ? a : b; }
+static inline int64_t fx_max64(int64_t a, int64_t b) { return a > b ? a : b; }
+static inline int64_t fx_clamp64(int64_t v, int64_t lo, int64_t hi)
+{
+	return v < lo ? lo : (v > hi ? hi : v);
+}
+
+#endif

@@ -1,0 +1,68 @@
+/* Kinematics, wheel position loop and odometry, all fixed point.
+ *
+ * Body twist (vx, vy, w) <-> wheel surface travel per tick:
+ *   differential: left = vx - w*T/2, right = vx + w*T/2      (w in rad)
+ *   mecanum:      fl = vx - vy - w*(L+T)/2, fr = vx + vy + w*(L+T)/2,
+ *                 rl = vx + vy - w*(L+T)/2, rr = vx - vy + w*(L+T)/2
+ * with T the track width and L the wheel base.
+ *
+ * Each wheel follows a reference position integrated from the commanded
+ * travel; the setpoint sent to the drive is the feed-forward speed plus
+ * kp * (reference - measured), so drive lag and quantisation never
+ * accumulate into pose error.
+ */
+#ifndef KIN_H
+#define KIN_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "fx.h"
+#include "motion.h"
+
+#define KIN_MAX_WHEELS 4
+
+typedef struct {
+	uint8_t kin;       /* motion_kin_t */
+	uint8_t n;         /* wheels */
+	uint32_t tick_hz;
+	q32_t counts_per_mm;   /* Q32 */
+	q32_t mm_per_count;    /* Q32 */
+	/* Wheel travel (mm) per degree of body rotation, Q32: (T/2)*pi/180 on a
+	 * differential base, ((L+T)/2)*pi/180 on mecanum. */
+	q32_t mm_per_deg;
+	q32_t deg_per_mm;      /* inverse of mm_per_deg, Q32 */
+	q32_t kp_pt;           /* position gain per tick, Q32 (kp / tick_hz) */
+} kin_params_t;
+
+typedef struct {
+	kin_params_t p;
+	/* Reference wheel positions in counts, Q32, and the last measured counts. */
+	int64_t ref_counts_q32[KIN_MAX_WHEELS];
+	int32_t last_meas[KIN_MAX_WHEELS];
+	int64_t meas_accum[KIN_MAX_WHEELS]; /* unwrapped measured counts */
+	bool synced;
+} kin_t;
+
+void kin_init(kin_t *k, const kin_params_t *p);
+
+/* Body twist per tick -> wheel travel per tick (mm, Q32). */
+void kin_body_to_wheels(const kin_params_t *p, const fx_twist_t *body, q32_t wheel_mm_pt[]);
+/* Wheel travel (mm, Q32) -> body displacement (mm, deg, Q32). */
+void kin_wheels_to_body(const kin_params_t *p, const q32_t wheel_mm[], fx_twist_t *body);
+
+/* Take the measured encoder counts as the new reference (servo on, after a
+ * fault, after setPosition); no motion results. */
+void kin_sync(kin_t *k, const int32_t meas_counts[]);
+
+/* One tick of the wheel loop: advance the references by the body twist,
+ * read the measured counts, return drive setpoints (counts/s, Q8) and the
+ * measured body displacement since the previous call (for odometry).
+ * following_err_counts (optional) receives the largest |ref - meas|. */
+void kin_step(kin_t *k, const fx_twist_t *body, const int32_t meas_counts[],
+	      int32_t out_cps_q8[], fx_twist_t *measured_delta, int64_t *following_err_counts);
+
+/* Integrate a body-frame displacement into a world pose (midpoint heading). */
+void odom_integrate(fx_pose_t *pose, const fx_twist_t *delta_body);
+
+#endif

@@ -1,0 +1,150 @@
+/* Motion engine: the queue of motion commands and the fixed-point trajectory
+ * generator that turns them into one body velocity per control tick.
+ *
+ * Everything here is integer arithmetic (fx.h formats). The caller (vehicle.c)
+ * owns the unit's state machine and refusal rules; this module only plans and
+ * executes motion and reports whether it accepted a plan.
+ *
+ * Per tick: motion_tick(m, measured_pose, &twist). The engine advances its
+ * reference pose by exactly the twist it outputs; when it is idle it follows
+ * the measured (odometry) pose so that relative commands start from where
+ * the unit really is.
+ */
+#ifndef MOTION_H
+#define MOTION_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "fx.h"
+#include "traj.h"
+
+#define MOTION_QUEUE_LEN 32
+
+typedef struct {
+	q32_t x_mm, y_mm, th_deg; /* th wrapped to [-180, 180) */
+} fx_pose_t;
+
+/* Body-frame velocity for one tick: mm/tick and deg/tick, Q32. */
+typedef struct {
+	q32_t vx_pt, vy_pt, w_pt;
+} fx_twist_t;
+
+typedef enum {
+	MOTION_KIN_DIFF = 0,
+	MOTION_KIN_OMNI = 1,
+} motion_kin_t;
+
+typedef struct {
+	uint32_t tick_hz;
+	motion_kin_t kin;
+	/* Hard limits, per second, Q32 (mm/s, deg/s, mm/s^2, deg/s^2). Stops
+	 * (stop, pause, contact, obstacle) decelerate at acc_limit. */
+	q32_t vel_limit_t, vel_limit_r, acc_limit_t, acc_limit_r;
+	q32_t cruise_blend_mm;
+} motion_params_t;
+
+typedef enum {
+	MCMD_NONE = 0,
+	MCMD_LINE,      /* straight segment in the world frame, then final heading */
+	MCMD_TURN,      /* rotate in place by an angle (may exceed a turn) */
+	MCMD_ARC,       /* arc about a centre by an angle */
+	MCMD_CRUISE,    /* blended waypoint */
+	MCMD_STOP_AT,   /* linear-abs target: stop there */
+} motion_cmd_kind_t;
+
+typedef struct {
+	uint8_t kind;       /* motion_cmd_kind_t */
+	uint8_t flags;
+	fx_pose_t target;   /* world frame; th used where the kind has a heading */
+	q32_t cx_mm, cy_mm; /* arc centre, world frame */
+	q32_t angle_deg;    /* turn or arc sweep, signed, unwrapped */
+} motion_cmd_t;
+
+typedef enum {
+	MODE_IDLE = 0,
+	MODE_PATH,       /* executing queued path commands */
+	MODE_JOG,        /* velocity command with watchdog */
+	MODE_CONTINUOUS, /* retargetable goal */
+	MODE_JOYSTICK,   /* velocity target from the joystick */
+} motion_mode_t;
+
+typedef struct {
+	motion_params_t p;
+	/* Settings in per-tick units (derived once per change). */
+	q32_t v_t_pt, v_r_pt, a_t_pt2, a_r_pt2;
+	q32_t amax_t_pt2, amax_r_pt2, vmax_t_pt, vmax_r_pt;
+	q32_t cap_t_pt; /* caution cap, 0 = none */
+	uint32_t jog_timeout_ticks;
+
+	fx_pose_t ref;     /* reference (commanded) pose */
+	fx_twist_t vel;    /* current commanded body velocity */
+	uint8_t mode;      /* motion_mode_t */
+	bool paused, stopping, pause_pending;
+
+	motion_cmd_t q[MOTION_QUEUE_LEN];
+	uint8_t q_head, q_count;
+
+	traj_exec_t ex;    /* execution state of the active segment/mode */
+
+	/* Jog and joystick velocity targets (body frame, per tick). */
+	fx_twist_t vtarget;
+	uint32_t jog_age_ticks;
+	/* Continuous mode goal (world frame). */
+	fx_pose_t goal;
+} motion_t;
+
+void motion_init(motion_t *m, const motion_params_t *p);
+
+/* Settings, per second, Q32. Values are validated by the caller; a new
+ * velocity takes effect continuously while moving. */
+void motion_set_velocity(motion_t *m, q32_t vt, q32_t vr);
+void motion_set_accel(motion_t *m, q32_t at, q32_t ar);
+void motion_set_jog_timeout_ms(motion_t *m, uint32_t ms);
+/* Caution speed cap (obstacle-warning input); 0 removes it. */
+void motion_set_caution(motion_t *m, q32_t vt_cap);
+
+/* Redefine the reference pose (setPosition). */
+void motion_set_pose(motion_t *m, const fx_pose_t *p);
+
+/* Path commands. Each returns false, changing nothing, when the queue is
+ * full or the geometry cannot be executed by this kinematics. Relative
+ * commands are resolved against the reference pose at the call. */
+bool motion_forward(motion_t *m, q32_t dist_mm);
+bool motion_turn(motion_t *m, q32_t angle_deg);
+bool motion_linear_rel(motion_t *m, const fx_pose_t *rel);
+bool motion_linear_abs(motion_t *m, const fx_pose_t *abs_pose);
+bool motion_circular_rel(motion_t *m, q32_t cx_mm, q32_t cy_mm, q32_t angle_deg);
+bool motion_cruise_abs(motion_t *m, q32_t x_mm, q32_t y_mm);
+
+/* Velocity and goal modes. These take over from jog/continuous/joystick
+ * with continuous velocity; they are refused (false) while queued path
+ * motion runs. */
+bool motion_continuous_rel(motion_t *m, const fx_pose_t *rel);
+/* Body-frame velocity per second, Q32. All zero: decelerate to a stop. */
+bool motion_jog(motion_t *m, q32_t vx, q32_t vy, q32_t w);
+/* Joystick: enable/disable, and the input each tick (Q15 of full scale). */
+void motion_joystick_enable(motion_t *m, bool on);
+void motion_joystick_input(motion_t *m, int16_t x, int16_t y, int16_t r, bool present);
+
+/* pause: decelerate at the acceleration limit, keep all work; resume
+ * continues it. stop: decelerate at the acceleration limit and discard all
+ * work. halt: zero velocity at once and discard everything (servo is off
+ * or power is gone; nothing to decelerate). */
+void motion_pause(motion_t *m);
+void motion_resume(motion_t *m);
+void motion_stop(motion_t *m);
+void motion_halt(motion_t *m);
+
+/* Advance one tick. measured: odometry pose (followed while idle). */
+void motion_tick(motion_t *m, const fx_pose_t *measured, fx_twist_t *out);
+
+/* Queries. */
+bool motion_is_moving(const motion_t *m);   /* velocity not zero */
+bool motion_has_work(const motion_t *m);    /* moving, or anything pending */
+bool motion_is_paused(const motion_t *m);
+uint8_t motion_queue_len(const motion_t *m);
+uint8_t motion_mode(const motion_t *m);
+static inline const fx_pose_t *motion_ref_pose(const motion_t *m) { return &m->ref; }
+
+#endif

@@ -1,0 +1,133 @@
+/* VehicleService: the 34 operations of ../shared/spec/VehicleService.md.
+ *
+ * The IDL maps to C as: boolean return, in arguments by value, out
+ * arguments by pointer, structs as the vs_* types below, strings as
+ * NUL-terminated buffers owned by the unit (valid until the next call).
+ * Doubles appear only here, at the boundary; vs_api.c converts them once to
+ * the fixed-point units the tick uses, and rejects NaN, infinity and values
+ * out of range with false and a warning alarm.
+ *
+ * Nothing here blocks except vs_setPower (relay settle time, see hal.h);
+ * motion happens in vehicle_tick(), one call per control period.
+ */
+#ifndef VEHICLE_H
+#define VEHICLE_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "alarm.h"
+#include "config.h"
+#include "kin.h"
+#include "motion.h"
+#include "../hal/hal.h"
+
+#define VS_IF_VERSION "RTC VehicleService interface: ver.2.0.0"
+#define VS_FW_VERSION "Ver.1.0.0"
+#define VS_STATE_MSG_MAX 16
+
+/* getState codes (spec section 4). */
+enum {
+	VS_STATE_READY = 0x010,
+	VS_STATE_BUSY = 0x011,
+	VS_STATE_WARNING = 0x012,
+	VS_STATE_ALARM = 0x013,
+	VS_STATE_STUCK = 0x014,
+	VS_STATE_PAUSED = 0x015,
+	VS_STATE_AVOID = 0x016,
+	VS_STATE_LOCKED = 0x017,
+	VS_STATE_POWERED = 0x018,
+	VS_STATE_UNPOWERED = 0x019,
+};
+
+typedef struct { double x, y; } vs_point_t;
+typedef struct { double x, y, theta; } vs_position_t;
+typedef struct { double translation, rotation; } vs_velocity_t;
+
+typedef struct vehicle vehicle_t;
+
+/* Lifecycle. vehicle_init validates cfg (returns a negative value and the
+ * field name through *bad_field when invalid) and leaves the unit Unpowered. */
+int vehicle_init(vehicle_t *v, const vs_config_t *cfg, const vs_hal_t *hal, const char **bad_field);
+/* One control period. now_us: a free-running microsecond clock (wraps). */
+void vehicle_tick(vehicle_t *v, uint32_t now_us);
+
+/* The operations, in spec order. */
+bool vs_clearAlarm(vehicle_t *v);
+bool vs_getAccelerationLimit(vehicle_t *v, double *accLimitT, double *accLimitR);
+/* activeAlarms has room for max(numOfAlarm, 0) entries (the caller's
+ * buffer); *len receives how many were written. */
+bool vs_getActiveAlarm(vehicle_t *v, int16_t numOfAlarm, int16_t *numOfActiveAlarm,
+		       vs_alarm_t *activeAlarms, uint16_t *len);
+bool vs_getBatteryVoltage(vehicle_t *v, double *voltage);
+bool vs_getDefaultAcceleration(vehicle_t *v, vs_velocity_t *defaultAccel);
+bool vs_getDefaultVelocity(vehicle_t *v, vs_velocity_t *defaultVel);
+bool vs_getIFVersion(vehicle_t *v, const char **version);
+bool vs_getInput(vehicle_t *v, uint32_t ioid, uint32_t *input);
+bool vs_getPosition(vehicle_t *v, vs_position_t *pos);
+bool vs_getServoStatus(vehicle_t *v, uint32_t axisid, bool *status);
+bool vs_getState(vehicle_t *v, int16_t *state, char msg[VS_STATE_MSG_MAX]);
+bool vs_getVelocityLimit(vehicle_t *v, double *velLimitT, double *velLimitR);
+bool vs_getVersion(vehicle_t *v, const char **ver);
+bool vs_moveCircularRel(vehicle_t *v, vs_point_t centerPoint, double theta);
+bool vs_moveContinuousRel(vehicle_t *v, vs_position_t pos);
+bool vs_moveCruiseAbs(vehicle_t *v, vs_point_t cruisePoint);
+bool vs_moveForward(vehicle_t *v, double x_);
+bool vs_moveJog(vehicle_t *v, double xVel, double yVel, double thetaVel);
+bool vs_moveLinearAbs(vehicle_t *v, vs_position_t pos);
+bool vs_moveLinearRel(vehicle_t *v, vs_position_t pos);
+bool vs_moveTurn(vehicle_t *v, double theta_);
+bool vs_pause(vehicle_t *v);
+bool vs_resume(vehicle_t *v);
+bool vs_setAcceleration(vehicle_t *v, vs_velocity_t accel);
+bool vs_setDigitalSensorLock(vehicle_t *v, bool OnOff);
+bool vs_setJogTimeout(vehicle_t *v, int16_t timeout);
+bool vs_setJoystick(vehicle_t *v, bool OnOff);
+bool vs_setOutput(vehicle_t *v, uint32_t ioid, uint32_t output, uint32_t mask);
+bool vs_setPosition(vehicle_t *v, vs_position_t pos);
+bool vs_setPower(vehicle_t *v, bool OnOff);
+bool vs_setServo(vehicle_t *v, bool OnOff);
+bool vs_setVelocity(vehicle_t *v, vs_velocity_t vel);
+bool vs_stop(vehicle_t *v);
+bool vs_unlock(vehicle_t *v);
+
+/* Diagnostics for the bring-up console, traces and tests (not interface
+ * operations). */
+typedef struct {
+	fx_pose_t ref_pose;              /* commanded */
+	fx_pose_t odom_pose;             /* measured (odometry) */
+	fx_twist_t cmd_twist_pt;         /* commanded body velocity per tick */
+	int32_t wheel_cps_q8[VS_MAX_AXES];   /* drive setpoints */
+	uint32_t ticks;                  /* control ticks since init */
+	uint32_t overruns;               /* ticks that arrived late */
+	uint8_t queue_len;
+	uint8_t mode;                    /* motion_mode_t */
+} vs_diag_t;
+void vehicle_diag(const vehicle_t *v, vs_diag_t *d);
+
+/* Implementation detail: static allocation by the caller, fields private. */
+struct vehicle {
+	vs_config_t cfg;
+	vs_hal_t hal;
+	motion_t motion;
+	kin_t kin;
+	alarm_list_t alarms;
+	fx_pose_t odom;
+	/* Settings in force (interface units, as accepted). */
+	vs_velocity_t vel_set, acc_set;
+	int16_t jog_timeout_ms;
+	/* Unit state. */
+	bool powered, servo, locked, stuck, sensor_lock, joystick_on;
+	uint32_t out_shadow[VS_MAX_IO];
+	uint32_t ticks, overruns, last_now_us;
+	bool have_now;
+	int32_t wheel_cps_q8[VS_MAX_AXES];
+	fx_twist_t cmd;
+	/* Supervision. */
+	uint32_t drive_silent_ticks[VS_MAX_AXES];
+	uint32_t encoder_still_ticks[VS_MAX_AXES];
+	uint32_t battery_mv;
+	char state_msg[VS_STATE_MSG_MAX];
+};
+
+#endif

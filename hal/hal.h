@@ -1,0 +1,60 @@
+/* Hardware abstraction: the only way the firmware touches the plant.
+ *
+ * One const table of operations plus a context pointer, as libmodbus does for
+ * its backends: one build can then hold several implementations (a CiA 402
+ * drive on one axis, a Modbus drive on another, the simulated plant in
+ * tests). Every call is non-blocking on the tick path except power_set,
+ * which may wait for the relay's settle time (documented per backend, at most
+ * 50 ms) and is only called from a command, never from the tick.
+ *
+ * Units: wheel velocity setpoints in encoder counts per second, Q8 (x256);
+ * encoder position in counts, free-running and wrapping; battery in mV.
+ */
+#ifndef HAL_H
+#define HAL_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+typedef struct {
+	int32_t position_counts; /* free-running, wraps; compare by difference */
+	uint16_t fault_code;     /* 0: no fault; otherwise the drive's own code */
+	bool enabled;            /* power stage actually on (servo on) */
+	bool fresh;              /* a reply arrived since the previous read */
+} hal_drive_state_t;
+
+typedef struct {
+	int16_t axis[3]; /* x (forward), y (left), rotation (CCW); +-32767 full scale */
+	bool present;    /* false: no device, or the device was lost */
+} hal_joystick_t;
+
+typedef struct vs_hal_ops {
+	/* Wheel drives, axis 0..n-1 (see vs_kinematics_t for the order). */
+	void (*drive_set_velocity)(void *ctx, uint8_t axis, int32_t counts_per_s_q8);
+	void (*drive_enable)(void *ctx, uint8_t axis, bool on);
+	void (*drive_read)(void *ctx, uint8_t axis, hal_drive_state_t *st);
+	void (*drive_reset_fault)(void *ctx, uint8_t axis);
+
+	/* Main drive-power relay: command it and report the feedback contact. */
+	bool (*power_set)(void *ctx, bool on);
+	bool (*power_feedback)(void *ctx);
+
+	/* Digital IO by io.xml id. false: the id is not served by this backend. */
+	bool (*io_read)(void *ctx, uint32_t ioid, uint32_t *value);
+	bool (*io_write)(void *ctx, uint32_t ioid, uint32_t value);
+
+	/* Discrete safety and sensor inputs, sampled once per tick. */
+	bool (*contact)(void *ctx);
+	bool (*obstacle)(void *ctx);
+	bool (*obstacle_caution)(void *ctx);
+	bool (*estop)(void *ctx);
+	void (*joystick)(void *ctx, hal_joystick_t *js);
+	uint32_t (*battery_mv)(void *ctx);
+} vs_hal_ops_t;
+
+typedef struct {
+	const vs_hal_ops_t *ops;
+	void *ctx;
+} vs_hal_t;
+
+#endif
