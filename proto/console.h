@@ -1,0 +1,60 @@
+/* Bring-up console: the line protocol of spec section 7.
+ *
+ * Bytes from the link are collected into lines (CR, LF or CRLF end a line);
+ * each complete line yields exactly one reply line (none for an empty line
+ * or a '#' comment). A line longer than CONSOLE_LINE_MAX bytes is discarded
+ * whole and answered with one error. Interface operations come from the
+ * command table (proto/commands.def); bring-up extras start with '$' and
+ * never change the meaning of an operation.
+ */
+#ifndef CONSOLE_H
+#define CONSOLE_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "../firmware/vehicle.h"
+
+#define CONSOLE_LINE_MAX 255
+#define CONSOLE_REPLY_MAX 1024
+
+/* Console error codes ("error <code> <message>"). */
+enum {
+	CONSOLE_E_UNKNOWN_OP = 1,   /* no such operation */
+	CONSOLE_E_ARITY = 2,        /* wrong number of arguments */
+	CONSOLE_E_NUMBER = 3,       /* not a number, or not finite */
+	CONSOLE_E_RANGE = 4,        /* integer out of its IDL type's range */
+	CONSOLE_E_BOOL = 5,         /* not a boolean */
+	CONSOLE_E_TOO_LONG = 6,     /* line over CONSOLE_LINE_MAX bytes */
+	CONSOLE_E_BINARY = 7,       /* control or non-ASCII bytes in the line */
+	CONSOLE_E_EXTRA = 8,        /* a '$' bring-up command failed */
+};
+
+typedef void (*console_write_fn)(void *ctx, const char *s, size_t n);
+/* Handles a '$' command the console itself does not know. Returns false if
+ * it does not know it either. reply gets one line without the newline. */
+typedef bool (*console_extra_fn)(void *ctx, int argc, char **argv, char *reply, size_t cap);
+
+typedef struct {
+	vehicle_t *v;
+	console_write_fn write;
+	void *wctx;
+	console_extra_fn extra;
+	void *xctx;
+	char line[CONSOLE_LINE_MAX + 1];
+	size_t len;
+	bool overflow;    /* discarding the rest of an over-long line */
+	bool last_cr;     /* swallow the LF of a CRLF */
+	uint32_t lines, errors;
+} console_t;
+
+void console_init(console_t *c, vehicle_t *v, console_write_fn write, void *wctx);
+void console_set_extra(console_t *c, console_extra_fn fn, void *ctx);
+/* Feed received bytes; replies are written as whole lines ending in "\n". */
+void console_feed(console_t *c, const uint8_t *data, size_t n);
+/* Run one line (no line ending). Returns false when the line gets no reply
+ * (empty or comment); otherwise reply holds the line without "\n". */
+bool console_exec(console_t *c, const char *line, char *reply, size_t cap);
+
+#endif
