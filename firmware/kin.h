@@ -32,7 +32,7 @@ typedef struct {
 	 * differential base, ((L+T)/2)*pi/180 on mecanum. */
 	q32_t mm_per_deg;
 	q32_t deg_per_mm;      /* inverse of mm_per_deg, Q32 */
-	q32_t kp_pt;           /* position gain per tick, Q32 (kp / tick_hz) */
+	int64_t kp_q16;        /* position loop gain, 1/s, Q16 */
 } kin_params_t;
 
 typedef struct {

@@ -46,19 +46,26 @@ typedef struct {
 
 typedef enum {
 	MCMD_NONE = 0,
-	MCMD_LINE,      /* straight segment in the world frame, then final heading */
-	MCMD_TURN,      /* rotate in place by an angle (may exceed a turn) */
-	MCMD_ARC,       /* arc about a centre by an angle */
-	MCMD_CRUISE,    /* blended waypoint */
-	MCMD_STOP_AT,   /* linear-abs target: stop there */
+	MCMD_LINE,    /* to a world pose: face, straight line, final heading (differential);
+			 one straight move with blended heading (omni) */
+	MCMD_FORWARD, /* straight along the current heading, signed, heading kept */
+	MCMD_TURN,    /* rotate in place by an angle (may exceed a turn) */
+	MCMD_ARC,     /* rigid rotation about a centre by an angle */
+	MCMD_CRUISE,  /* blended waypoint */
 } motion_cmd_kind_t;
 
 typedef struct {
-	uint8_t kind;       /* motion_cmd_kind_t */
-	uint8_t flags;
-	fx_pose_t target;   /* world frame; th used where the kind has a heading */
-	q32_t cx_mm, cy_mm; /* arc centre, world frame */
-	q32_t angle_deg;    /* turn or arc sweep, signed, unwrapped */
+	uint8_t kind;        /* motion_cmd_kind_t */
+	uint8_t stage;       /* execution progress within the command */
+	bool has_heading;    /* LINE: target.th is to be reached */
+	bool start_known;    /* CRUISE: sx, sy hold where its line starts */
+	bool has_corner;     /* CRUISE: blended into the next waypoint */
+	fx_pose_t target;    /* world frame end pose (position for every kind) */
+	q32_t cx_mm, cy_mm;  /* ARC centre, world frame */
+	q32_t angle_deg;     /* TURN / ARC sweep, signed, unwrapped */
+	q32_t sx_mm, sy_mm;  /* CRUISE: start of the incoming line; ARC: centre, body frame */
+	q32_t vend_pt;       /* CRUISE: planned speed through the corner */
+	traj_corner_t corner;
 } motion_cmd_t;
 
 typedef enum {
@@ -68,6 +75,24 @@ typedef enum {
 	MODE_CONTINUOUS, /* retargetable goal */
 	MODE_JOYSTICK,   /* velocity target from the joystick */
 } motion_mode_t;
+
+typedef enum { SEG_NONE = 0, SEG_LINE, SEG_TURN, SEG_ARC, SEG_CORNER } seg_kind_t;
+
+/* The piece of path being executed. */
+typedef struct {
+	uint8_t kind;      /* seg_kind_t */
+	int8_t dir;        /* TURN/ARC: sweep sign */
+	q32_t len, s;      /* length and progress (mm, or deg for TURN/ARC) */
+	fx_pose_t p0;      /* start pose */
+	fx_pose_t p_end;   /* exact end pose, taken at completion */
+	int32_t ux, uy;    /* LINE/CORNER entry: unit direction, Q30 */
+	q32_t dth;         /* LINE: heading change along it (omni) */
+	q32_t cx, cy;      /* ARC centre */
+	q32_t arc_k;       /* ARC: mm of travel per degree of sweep */
+	q32_t arc_kx, arc_ky; /* ARC: body velocity per unit rotation rate (mm/deg) */
+	q32_t omni_k;      /* LINE (omni): mm per degree of heading change */
+	traj_corner_t corner;
+} seg_t;
 
 typedef struct {
 	motion_params_t p;
@@ -80,18 +105,22 @@ typedef struct {
 	fx_pose_t ref;     /* reference (commanded) pose */
 	fx_twist_t vel;    /* current commanded body velocity */
 	uint8_t mode;      /* motion_mode_t */
-	bool paused, stopping, pause_pending;
+	bool paused;       /* held by pause (decelerating or stopped) */
+	bool stopping;     /* stop(): decelerating, then discard */
+	bool joystick;     /* joystick enabled */
 
 	motion_cmd_t q[MOTION_QUEUE_LEN];
 	uint8_t q_head, q_count;
 
-	traj_exec_t ex;    /* execution state of the active segment/mode */
+	seg_t seg;         /* active piece (mode PATH) */
+	q32_t v;           /* speed along the active piece, per tick */
 
-	/* Jog and joystick velocity targets (body frame, per tick). */
+	/* Jog / joystick velocity target (body frame, per tick). */
 	fx_twist_t vtarget;
 	uint32_t jog_age_ticks;
 	/* Continuous mode goal (world frame). */
 	fx_pose_t goal;
+	bool goal_position_done;
 } motion_t;
 
 void motion_init(motion_t *m, const motion_params_t *p);

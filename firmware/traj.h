@@ -1,4 +1,52 @@
-/* Trajectory generation (see traj.c header comment for the derivation). */
+/* Trajectory generation in fixed point.
+ *
+ * 1. The speed profile along a path (traj_step)
+ *
+ * Time is discrete: each tick the path parameter advances by the speed u
+ * chosen for that tick, s[k+1] = s[k] + u[k+1]. With acceleration a per
+ * tick^2, braking from u by a each tick covers
+ *
+ *     B(u) = (u - a) + (u - 2a) + ... + (u - n a) = n u - a n (n + 1) / 2,
+ *     n = floor(u / a),
+ *
+ * so the unit can still stop within the remaining distance d after moving u
+ * this tick exactly when G(u) = u + B(u) <= d. G is continuous and strictly
+ * increasing: on [n a, (n + 1) a) it is linear, G(u) = (n + 1) u - a n (n + 1) / 2,
+ * and at u = n a it equals T(n) = a n (n + 1) / 2. The fastest admissible
+ * speed is therefore, with n the largest integer such that T(n) <= d,
+ *
+ *     Umax(d) = (d + T(n)) / (n + 1).
+ *
+ * Each tick picks u = min(v + a, vmax, Umax(d)). The choice is never forced
+ * to brake harder than a: G(u - a) = B(u) <= d - u, so Umax(d - u) >= u - a,
+ * which is the invariant that keeps every sample's |du| <= a. When d < a,
+ * Umax(d) = d: the last step covers the exact remainder, so endpoints land
+ * to the raw unit (2^-32 mm or deg) with no overshoot. Integer division
+ * rounds u down, which keeps G(u) <= d.
+ *
+ * A speed cap c at distance d ahead (a blended corner) is met by braking for
+ * a virtual stop at d + B(c): at the cap the speed is within one tick's
+ * acceleration of c, and inside the capped piece u is clamped to c.
+ *
+ * 2. Blended corners (moveCruiseAbs)
+ *
+ * A corner of deflection phi between two straight lines is a symmetric pair
+ * of clothoids (curvature linear in path length): curvature rises from 0 to
+ * kmax over a half-length Lh and falls back, so the heading along the corner
+ * is psi (s / Lh)^2 on the first half and phi - psi ((2 Lh - s) / Lh)^2 on
+ * the second, psi = phi / 2. Rotation rate w = v k is therefore continuous:
+ * no rotational acceleration step where a line meets the curve.
+ * With the unit clothoid half ending at (x1, y1) = (int_0^1 cos(psi u^2) du,
+ * int_0^1 sin(psi u^2) du) (Simpson, 64 intervals), the corner starts and
+ * ends at the tangent distance T = Lh (x1 + y1 tan psi) from the waypoint, so
+ * Lh follows from the tangent length the neighbouring segments leave free.
+ * Speed in the corner is capped so that w = v kmax <= vr and the rotational
+ * acceleration v^2 dk/ds + a k <= ar: v <= vr Lh / phi,
+ * v <= Lh sqrt(ar / (2 phi)), a <= ar Lh / (2 phi) (angles in degrees).
+ * A backward pass over the queued waypoints lowers each corner's speed so
+ * that the unit can always brake to the next corner's speed and to a stop
+ * at the last waypoint.
+ */
 #ifndef TRAJ_H
 #define TRAJ_H
 
@@ -7,17 +55,35 @@
 
 #include "fx.h"
 
-/* Execution state of the active segment or velocity mode. */
+/* Braking distance B(u) at a per tick^2. */
+q32_t traj_brake_dist(q32_t u, q32_t a);
+/* Largest u with u + B(u) <= d. */
+q32_t traj_umax(q32_t d, q32_t a);
+/* Next speed along a path with d remaining (d >= 0), current speed v,
+ * cap vmax, acceleration a. */
+q32_t traj_step(q32_t v, q32_t d, q32_t vmax, q32_t a);
+/* Largest speed from which braking at a reaches at most c within d. */
+q32_t traj_reach(q32_t d, q32_t c, q32_t a);
+
+/* (a << 32) / b, rounded toward zero, saturating. */
+q32_t fx_div(q32_t a, q32_t b);
+
+/* Geometry of a blended corner with tangent length t_mm and deflection
+ * phi_deg (signed, |phi| < 180). */
 typedef struct {
-	uint8_t phase;
-	q32_t s, len;         /* progress and length along the active primitive */
-	q32_t v;              /* speed along it, per tick, >= 0 */
-	q32_t ux_q30_dummy;
-	int32_t ux, uy;       /* unit direction, Q30 */
-	q32_t x0, y0, th0;    /* primitive start */
-	q32_t cx, cy, r_mm;   /* arc centre and radius */
-	q32_t sweep;          /* arc / turn sweep (signed) */
-	int32_t sign;
-} traj_exec_t;
+	q32_t phi_deg;   /* signed deflection */
+	q32_t lh_mm;     /* half length */
+	q32_t t_mm;      /* tangent length: waypoint to corner start and end */
+	q32_t k_mm_deg;  /* Lh / |phi|: speed cap per unit rotation rate */
+	q32_t vacc_pt;   /* Lh sqrt(ar / (2 |phi|)): speed cap from rotational acceleration */
+	q32_t acc_pt2;   /* ar Lh / (2 |phi|): path acceleration cap in the corner */
+} traj_corner_t;
+
+/* Plans a corner: returns false when no blend is possible (deflection too
+ * close to a reversal, or no room). ar_pt2 is the rotational acceleration
+ * in force (deg/tick^2, Q32). */
+bool traj_corner_plan(traj_corner_t *c, q32_t phi_deg, q32_t t_avail_mm, q32_t ar_pt2);
+/* Heading change from the corner start at path length s (0..2 Lh). */
+q32_t traj_corner_heading(const traj_corner_t *c, q32_t s);
 
 #endif

@@ -1,0 +1,196 @@
+/* Fixed-point helpers: products without 128-bit types (so the same code
+ * runs on a Cortex-M), integer square root, trigonometry. */
+#include "fx.h"
+
+int64_t fx_mul_q30(int64_t a, int32_t b_q30)
+{
+	/* a = hi * 2^32 + lo, lo unsigned; each partial product fits in 64 bits. */
+	int64_t hi = a >> 32;
+	int64_t lo = (int64_t)(uint32_t)(uint64_t)a;
+	int64_t p_hi = hi * b_q30;
+	int64_t p_lo = lo * b_q30;
+	return p_hi * 4 + ((p_lo + ((int64_t)1 << 29)) >> 30);
+}
+
+q32_t fx_mul(q32_t a, q32_t b)
+{
+	bool neg = (a < 0) != (b < 0);
+	uint64_t ua = (uint64_t)(a < 0 ? -a : a), ub = (uint64_t)(b < 0 ? -b : b);
+	uint64_t ah = ua >> 32, al = ua & 0xffffffffu, bh = ub >> 32, bl = ub & 0xffffffffu;
+	uint64_t hh = ah * bh, mid1 = ah * bl, mid2 = al * bh, ll = al * bl;
+	/* result = hh<<32 + mid1 + mid2 + ll>>32 (+ rounding) */
+	if (hh >> 31)
+		return neg ? INT64_MIN : INT64_MAX;
+	uint64_t r = (hh << 32);
+	uint64_t add = mid1 + mid2;
+	if (add < mid1 || r + add < r)
+		return neg ? INT64_MIN : INT64_MAX;
+	r += add;
+	uint64_t low = (ll >> 32) + ((ll >> 31) & 1u);
+	if (r + low < r || (r + low) >> 63)
+		return neg ? INT64_MIN : INT64_MAX;
+	r += low;
+	return neg ? -(int64_t)r : (int64_t)r;
+}
+
+int64_t fx_muldiv(int64_t a, int64_t num, int64_t den)
+{
+	bool neg = (a < 0) != (num < 0);
+	uint64_t ua = (uint64_t)fx_abs64(a), un = (uint64_t)fx_abs64(num), ud = (uint64_t)den;
+	uint64_t q = ua / ud, r = ua % ud;
+	/* a*num/den = q*num + r*num/den; r < den keeps r*num small for the
+	 * operand sizes used here (den and num below 2^32). */
+	uint64_t res = q * un + (r * un) / ud;
+	return neg ? -(int64_t)res : (int64_t)res;
+}
+
+uint64_t fx_isqrt64(uint64_t v)
+{
+	uint64_t res = 0, bit = (uint64_t)1 << 62;
+	while (bit > v)
+		bit >>= 2;
+	while (bit) {
+		if (v >= res + bit) {
+			v -= res + bit;
+			res = (res >> 1) + bit;
+		} else {
+			res >>= 1;
+		}
+		bit >>= 2;
+	}
+	return res;
+}
+
+/* Taylor series on |x| <= pi/4 (Q30 radians): the first omitted terms are
+ * below 2e-9, the size of two Q30 steps. */
+static int32_t sin_poly(int64_t x)
+{
+	int64_t x2 = (x * x) >> 30;
+	int64_t t = FX_Q30_ONE;
+	t = FX_Q30_ONE - ((x2 * t) >> 30) / 72;
+	t = FX_Q30_ONE - ((x2 * t) >> 30) / 42;
+	t = FX_Q30_ONE - ((x2 * t) >> 30) / 20;
+	t = FX_Q30_ONE - ((x2 * t) >> 30) / 6;
+	return (int32_t)((x * t) >> 30);
+}
+
+static int32_t cos_poly(int64_t x)
+{
+	int64_t x2 = (x * x) >> 30;
+	int64_t t = FX_Q30_ONE;
+	t = FX_Q30_ONE - ((x2 * t) >> 30) / 90;
+	t = FX_Q30_ONE - ((x2 * t) >> 30) / 56;
+	t = FX_Q30_ONE - ((x2 * t) >> 30) / 30;
+	t = FX_Q30_ONE - ((x2 * t) >> 30) / 12;
+	t = FX_Q30_ONE - ((x2 * t) >> 30) / 2;
+	return (int32_t)t;
+}
+
+#define HALF_PI_Q30 1686629713LL /* pi/2 * 2^30 */
+
+/* sin over the first quadrant; r is the Q30 fraction of a quarter turn. */
+static int32_t sin_quadrant(uint32_t r)
+{
+	if (r <= (1u << 29))
+		return sin_poly(((int64_t)r * HALF_PI_Q30) >> 30);
+	return cos_poly(((int64_t)((1u << 30) - r) * HALF_PI_Q30) >> 30);
+}
+
+int32_t fx_sin_bam(uint32_t bam)
+{
+	uint32_t quadrant = bam >> 30, r = bam & 0x3fffffffu;
+	switch (quadrant) {
+	case 0:
+		return sin_quadrant(r);
+	case 1:
+		return sin_quadrant((1u << 30) - r);
+	case 2:
+		return -sin_quadrant(r);
+	default:
+		return -sin_quadrant((1u << 30) - r);
+	}
+}
+
+int32_t fx_cos_bam(uint32_t bam) { return fx_sin_bam(bam + (1u << 30)); }
+
+q32_t fx_wrap_deg(q32_t deg)
+{
+	if (deg >= -FX_DEG_180 && deg < FX_DEG_180)
+		return deg;
+	q32_t r = (deg + FX_DEG_180) % FX_DEG_360;
+	if (r < 0)
+		r += FX_DEG_360;
+	return r - FX_DEG_180;
+}
+
+uint32_t fx_deg_to_bam(q32_t deg)
+{
+	q32_t w = fx_wrap_deg(deg);
+	/* deg * 2^32 / 360 in Q32 degrees is w / 360, rounded. */
+	int64_t b = (w >= 0 ? w + 180 : w - 180) / 360;
+	return (uint32_t)(int32_t)b;
+}
+
+/* atan(2^-i) in Q32 degrees. */
+static const int64_t cordic_atan_deg[32] = {
+	193273528320, 114096026022, 60285206653, 30601712202, 15360239180, 7687607525,
+	3844741810,   1922488225,   961258780,   480631223,   240315841,   120157949,
+	60078978,     30039490,     15019745,    7509872,     3754936,     1877468,
+	938734,       469367,       234684,      117342,      58671,       29335,
+	14668,        7334,         3667,        1833,        917,         458,
+	229,          115};
+
+q32_t fx_atan2_deg(int64_t y, int64_t x)
+{
+	if (x == 0 && y == 0)
+		return 0;
+	/* Scale into +-2^60 so the CORDIC additions cannot overflow, then
+	 * rotate into the right half plane. */
+	while (fx_abs64(x) > ((int64_t)1 << 60) || fx_abs64(y) > ((int64_t)1 << 60)) {
+		x >>= 1;
+		y >>= 1;
+	}
+	while (fx_abs64(x) < ((int64_t)1 << 40) && fx_abs64(y) < ((int64_t)1 << 40)) {
+		x *= 2;
+		y *= 2;
+	}
+	q32_t angle = 0;
+	if (x < 0) {
+		/* rotate by 180 degrees */
+		x = -x;
+		y = -y;
+		angle = FX_DEG_180;
+	}
+	for (int i = 0; i < 32; i++) {
+		int64_t xs = x >> i, ys = y >> i;
+		if (y > 0) {
+			x += ys;
+			y -= xs;
+			angle += cordic_atan_deg[i];
+		} else {
+			x -= ys;
+			y += xs;
+			angle -= cordic_atan_deg[i];
+		}
+	}
+	return fx_wrap_deg(angle);
+}
+
+q32_t fx_hypot(q32_t x, q32_t y)
+{
+	uint64_t ax = (uint64_t)fx_abs64(x), ay = (uint64_t)fx_abs64(y);
+	int shift = 0;
+	while ((ax | ay) >> 31) {
+		ax >>= 1;
+		ay >>= 1;
+		shift++;
+	}
+	/* Keep as many bits as possible: scale up small vectors too. */
+	while (ax < ((uint64_t)1 << 30) && ay < ((uint64_t)1 << 30) && (ax | ay) && shift > -16) {
+		ax <<= 1;
+		ay <<= 1;
+		shift--;
+	}
+	uint64_t r = fx_isqrt64(ax * ax + ay * ay);
+	return shift >= 0 ? (q32_t)(r << shift) : (q32_t)(r >> -shift);
+}

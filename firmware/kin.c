@@ -1,0 +1,94 @@
+/* Kinematics, wheel position loop and odometry (equations in kin.h). */
+#include "kin.h"
+
+void kin_init(kin_t *k, const kin_params_t *p)
+{
+	*k = (kin_t){0};
+	k->p = *p;
+}
+
+void kin_body_to_wheels(const kin_params_t *p, const fx_twist_t *b, q32_t w[])
+{
+	q32_t rot = fx_mul(b->w_pt, p->mm_per_deg);
+	if (p->kin == MOTION_KIN_OMNI) {
+		w[0] = b->vx_pt - b->vy_pt - rot;
+		w[1] = b->vx_pt + b->vy_pt + rot;
+		w[2] = b->vx_pt + b->vy_pt - rot;
+		w[3] = b->vx_pt - b->vy_pt + rot;
+	} else {
+		w[0] = b->vx_pt - rot;
+		w[1] = b->vx_pt + rot;
+	}
+}
+
+void kin_wheels_to_body(const kin_params_t *p, const q32_t w[], fx_twist_t *b)
+{
+	if (p->kin == MOTION_KIN_OMNI) {
+		b->vx_pt = (w[0] + w[1] + w[2] + w[3]) / 4;
+		b->vy_pt = (-w[0] + w[1] + w[2] - w[3]) / 4;
+		b->w_pt = fx_mul((-w[0] + w[1] - w[2] + w[3]) / 4, p->deg_per_mm);
+	} else {
+		b->vx_pt = (w[0] + w[1]) / 2;
+		b->vy_pt = 0;
+		b->w_pt = fx_mul((w[1] - w[0]) / 2, p->deg_per_mm);
+	}
+}
+
+void kin_sync(kin_t *k, const int32_t meas[])
+{
+	for (uint8_t i = 0; i < k->p.n; i++) {
+		k->last_meas[i] = meas[i];
+		k->meas_accum[i] = 0;
+		k->ref_counts_q32[i] = 0;
+	}
+	k->synced = true;
+}
+
+static int32_t sat32(int64_t v)
+{
+	return v > INT32_MAX ? INT32_MAX : (v < INT32_MIN ? INT32_MIN : (int32_t)v);
+}
+
+void kin_step(kin_t *k, const fx_twist_t *body, const int32_t meas[], int32_t out_cps_q8[],
+	      fx_twist_t *measured_delta, int64_t *following_err_counts)
+{
+	q32_t travel[KIN_MAX_WHEELS], meas_mm[KIN_MAX_WHEELS];
+	int64_t worst = 0;
+	if (!k->synced)
+		kin_sync(k, meas);
+	kin_body_to_wheels(&k->p, body, travel);
+	for (uint8_t i = 0; i < k->p.n; i++) {
+		int32_t d = (int32_t)((uint32_t)meas[i] - (uint32_t)k->last_meas[i]);
+		k->last_meas[i] = meas[i];
+		k->meas_accum[i] += d;
+		meas_mm[i] = (q32_t)d * k->p.mm_per_count;
+
+		q32_t travel_counts = fx_mul(travel[i], k->p.counts_per_mm);
+		k->ref_counts_q32[i] += travel_counts;
+		int64_t err_q32 = k->ref_counts_q32[i] - k->meas_accum[i] * FX_ONE;
+		/* Keep both sides small: move the common integer part out. */
+		int64_t whole = k->meas_accum[i];
+		k->meas_accum[i] = 0;
+		k->ref_counts_q32[i] -= whole * FX_ONE;
+
+		int64_t ff_q8 = (travel_counts * (int64_t)k->p.tick_hz) >> 24;
+		int64_t fb_q8 = ((err_q32 >> 16) * k->p.kp_q16) >> 24;
+		out_cps_q8[i] = sat32(ff_q8 + fb_q8);
+		int64_t e = fx_abs64(err_q32) >> 32;
+		if (e > worst)
+			worst = e;
+	}
+	if (measured_delta)
+		kin_wheels_to_body(&k->p, meas_mm, measured_delta);
+	if (following_err_counts)
+		*following_err_counts = worst;
+}
+
+void odom_integrate(fx_pose_t *pose, const fx_twist_t *d)
+{
+	uint32_t mid = fx_deg_to_bam(pose->th_deg + d->w_pt / 2);
+	int32_t c = fx_cos_bam(mid), s = fx_sin_bam(mid);
+	pose->x_mm += fx_mul_q30(d->vx_pt, c) - fx_mul_q30(d->vy_pt, s);
+	pose->y_mm += fx_mul_q30(d->vx_pt, s) + fx_mul_q30(d->vy_pt, c);
+	pose->th_deg = fx_wrap_deg(pose->th_deg + d->w_pt);
+}

@@ -1,0 +1,975 @@
+/* Motion engine: command queue, path execution and velocity modes.
+ * Profile and corner maths are in traj.c; see traj.h for the derivation. */
+#include "motion.h"
+
+#include "kin.h"
+
+#define TINY_MM ((q32_t)4295)  /* 1e-6 mm: below this a line has no length */
+#define TINY_DEG ((q32_t)4295) /* 1e-6 deg */
+#define DEG_TO_RAD_Q32 ((q32_t)74961321) /* pi / 180 */
+
+static motion_cmd_t *q_at(motion_t *m, uint8_t i)
+{
+	return &m->q[(uint8_t)(m->q_head + i) % MOTION_QUEUE_LEN];
+}
+
+static void per_tick(motion_t *m)
+{
+	int64_t hz = m->p.tick_hz;
+	/* Per-tick values round down so a set limit is never exceeded. */
+	m->vmax_t_pt = m->p.vel_limit_t / hz;
+	m->vmax_r_pt = m->p.vel_limit_r / hz;
+	m->amax_t_pt2 = m->p.acc_limit_t / hz / hz;
+	m->amax_r_pt2 = m->p.acc_limit_r / hz / hz;
+}
+
+void motion_init(motion_t *m, const motion_params_t *p)
+{
+	*m = (motion_t){0};
+	m->p = *p;
+	per_tick(m);
+	m->v_t_pt = m->vmax_t_pt;
+	m->v_r_pt = m->vmax_r_pt;
+	m->a_t_pt2 = m->amax_t_pt2;
+	m->a_r_pt2 = m->amax_r_pt2;
+	m->jog_timeout_ticks = p->tick_hz / 2;
+}
+
+static void backward_pass(motion_t *m);
+
+void motion_set_velocity(motion_t *m, q32_t vt, q32_t vr)
+{
+	m->v_t_pt = vt / m->p.tick_hz;
+	m->v_r_pt = vr / m->p.tick_hz;
+	backward_pass(m);
+}
+
+void motion_set_accel(motion_t *m, q32_t at, q32_t ar)
+{
+	int64_t hz = m->p.tick_hz;
+	m->a_t_pt2 = at / hz / hz;
+	m->a_r_pt2 = ar / hz / hz;
+	if (m->a_t_pt2 < 1)
+		m->a_t_pt2 = 1;
+	if (m->a_r_pt2 < 1)
+		m->a_r_pt2 = 1;
+}
+
+void motion_set_jog_timeout_ms(motion_t *m, uint32_t ms)
+{
+	m->jog_timeout_ticks = (uint32_t)(((uint64_t)ms * m->p.tick_hz + 999) / 1000);
+}
+
+void motion_set_caution(motion_t *m, q32_t vt_cap) { m->cap_t_pt = vt_cap / m->p.tick_hz; }
+
+void motion_set_pose(motion_t *m, const fx_pose_t *p)
+{
+	m->ref = *p;
+	m->ref.th_deg = fx_wrap_deg(p->th_deg);
+}
+
+/* Effective translation speed limit (set value, caution cap). */
+static q32_t vt_eff(const motion_t *m)
+{
+	q32_t v = m->v_t_pt;
+	if (m->cap_t_pt > 0 && m->cap_t_pt < v)
+		v = m->cap_t_pt;
+	return v;
+}
+
+/* ---- queue ---------------------------------------------------------- */
+
+static bool queue_full(const motion_t *m) { return m->q_count >= MOTION_QUEUE_LEN; }
+
+/* Position where the last queued command ends, if known. */
+static bool tail_end(motion_t *m, q32_t *x, q32_t *y)
+{
+	if (m->q_count > 0) {
+		motion_cmd_t *c = q_at(m, (uint8_t)(m->q_count - 1));
+		*x = c->target.x_mm;
+		*y = c->target.y_mm;
+		return true;
+	}
+	if (m->mode == MODE_IDLE || m->mode == MODE_PATH) {
+		*x = m->ref.x_mm;
+		*y = m->ref.y_mm;
+		return true;
+	}
+	return false;
+}
+
+static bool push(motion_t *m, const motion_cmd_t *c)
+{
+	if (queue_full(m))
+		return false;
+	if (m->mode != MODE_IDLE && m->mode != MODE_PATH && m->q_count == 0 &&
+	    m->mode != MODE_JOG && m->mode != MODE_CONTINUOUS && m->mode != MODE_JOYSTICK)
+		return false;
+	*q_at(m, m->q_count) = *c;
+	m->q_count++;
+	if (m->mode == MODE_IDLE)
+		m->mode = MODE_PATH;
+	return true;
+}
+
+static void pop(motion_t *m)
+{
+	if (m->q_count == 0)
+		return;
+	m->q_head = (uint8_t)((m->q_head + 1) % MOTION_QUEUE_LEN);
+	m->q_count--;
+}
+
+/* Rotate a body-frame vector into the world frame at heading th. */
+static void body_to_world(q32_t th, q32_t bx, q32_t by, q32_t *wx, q32_t *wy)
+{
+	uint32_t b = fx_deg_to_bam(th);
+	int32_t c = fx_cos_bam(b), s = fx_sin_bam(b);
+	*wx = fx_mul_q30(bx, c) - fx_mul_q30(by, s);
+	*wy = fx_mul_q30(bx, s) + fx_mul_q30(by, c);
+}
+
+bool motion_forward(motion_t *m, q32_t dist_mm)
+{
+	motion_cmd_t c = {0};
+	c.kind = MCMD_FORWARD;
+	q32_t dx, dy;
+	body_to_world(m->ref.th_deg, dist_mm, 0, &dx, &dy);
+	c.target = m->ref;
+	c.target.x_mm += dx;
+	c.target.y_mm += dy;
+	c.angle_deg = dist_mm; /* signed distance */
+	return push(m, &c);
+}
+
+bool motion_turn(motion_t *m, q32_t angle_deg)
+{
+	motion_cmd_t c = {0};
+	c.kind = MCMD_TURN;
+	c.target = m->ref;
+	c.target.th_deg = fx_wrap_deg(m->ref.th_deg + angle_deg);
+	c.angle_deg = angle_deg;
+	return push(m, &c);
+}
+
+bool motion_linear_abs(motion_t *m, const fx_pose_t *abs_pose)
+{
+	motion_cmd_t c = {0};
+	c.kind = MCMD_LINE;
+	c.has_heading = true;
+	c.target = *abs_pose;
+	c.target.th_deg = fx_wrap_deg(abs_pose->th_deg);
+	return push(m, &c);
+}
+
+bool motion_linear_rel(motion_t *m, const fx_pose_t *rel)
+{
+	fx_pose_t t = m->ref;
+	q32_t dx, dy;
+	body_to_world(m->ref.th_deg, rel->x_mm, rel->y_mm, &dx, &dy);
+	t.x_mm += dx;
+	t.y_mm += dy;
+	t.th_deg = fx_wrap_deg(m->ref.th_deg + rel->th_deg);
+	return motion_linear_abs(m, &t);
+}
+
+bool motion_circular_rel(motion_t *m, q32_t cx_mm, q32_t cy_mm, q32_t angle_deg)
+{
+	motion_cmd_t c = {0};
+	q32_t dx, dy;
+	if (m->p.kin == MOTION_KIN_DIFF && cx_mm != 0)
+		return false;
+	body_to_world(m->ref.th_deg, cx_mm, cy_mm, &dx, &dy);
+	c.kind = MCMD_ARC;
+	c.cx_mm = m->ref.x_mm + dx;
+	c.cy_mm = m->ref.y_mm + dy;
+	c.sx_mm = cx_mm;
+	c.sy_mm = cy_mm;
+	c.angle_deg = angle_deg;
+	/* End pose: the start rotated about the centre. */
+	uint32_t b = fx_deg_to_bam(angle_deg);
+	int32_t co = fx_cos_bam(b), si = fx_sin_bam(b);
+	q32_t rx = -dx, ry = -dy;
+	c.target.x_mm = c.cx_mm + fx_mul_q30(rx, co) - fx_mul_q30(ry, si);
+	c.target.y_mm = c.cy_mm + fx_mul_q30(rx, si) + fx_mul_q30(ry, co);
+	c.target.th_deg = fx_wrap_deg(m->ref.th_deg + angle_deg);
+	return push(m, &c);
+}
+
+/* ---- cruise planning ------------------------------------------------- */
+
+static q32_t corner_cap(const motion_t *m, const motion_cmd_t *c)
+{
+	q32_t v = vt_eff(m);
+	q32_t vr = fx_mul(m->v_r_pt, c->corner.k_mm_deg);
+	vr -= vr / 100; /* 1 % margin: the step into the corner may carry one tick of a */
+	if (vr < v)
+		v = vr;
+	if (c->corner.vacc_pt < v)
+		v = c->corner.vacc_pt;
+	return v;
+}
+
+static q32_t seg_dist(q32_t x0, q32_t y0, q32_t x1, q32_t y1) { return fx_hypot(x1 - x0, y1 - y0); }
+
+/* Length of cruise command i's straight part: from the previous corner's
+ * exit (or its start) to its own corner's entry (or its waypoint). */
+static q32_t cruise_line_len(motion_t *m, uint8_t i)
+{
+	motion_cmd_t *c = q_at(m, i);
+	q32_t l = seg_dist(c->sx_mm, c->sy_mm, c->target.x_mm, c->target.y_mm);
+	if (i > 0) {
+		motion_cmd_t *p = q_at(m, (uint8_t)(i - 1));
+		if (p->kind == MCMD_CRUISE && p->has_corner)
+			l -= p->corner.t_mm;
+	}
+	if (c->has_corner)
+		l -= c->corner.t_mm;
+	return l > 0 ? l : 0;
+}
+
+/* Lower each corner's speed so the unit can brake to the next corner's speed
+ * on the line between, and to a stop at the last waypoint. */
+static void backward_pass(motion_t *m)
+{
+	q32_t next_v = 0;
+	for (int i = (int)m->q_count - 1; i >= 0; i--) {
+		motion_cmd_t *c = q_at(m, (uint8_t)i);
+		if (c->kind != MCMD_CRUISE || !c->has_corner) {
+			next_v = 0;
+			if (c->kind == MCMD_CRUISE)
+				c->vend_pt = 0;
+			continue;
+		}
+		q32_t v = corner_cap(m, c);
+		if ((uint8_t)(i + 1) < m->q_count) {
+			q32_t reach = traj_reach(cruise_line_len(m, (uint8_t)(i + 1)), next_v, m->a_t_pt2);
+			if (reach < v)
+				v = reach;
+		}
+		c->vend_pt = v;
+		next_v = v;
+	}
+}
+
+/* Distance from the reference to the point where the active line ends, if
+ * the head command is a cruise line being executed. */
+static bool head_line_remaining(motion_t *m, q32_t *rem)
+{
+	if (m->mode != MODE_PATH || m->seg.kind != SEG_LINE || m->q_count == 0)
+		return false;
+	*rem = m->seg.len - m->seg.s;
+	return true;
+}
+
+/* Plan the corner at queued cruise command i (blending into i + 1). */
+static void plan_corner(motion_t *m, uint8_t i)
+{
+	motion_cmd_t *c = q_at(m, i), *n = q_at(m, (uint8_t)(i + 1));
+	if (c->kind != MCMD_CRUISE || n->kind != MCMD_CRUISE || !c->start_known || c->has_corner)
+		return;
+	if (i == 0 && c->stage > 1)
+		return; /* already past its line */
+	q32_t inx = c->target.x_mm - c->sx_mm, iny = c->target.y_mm - c->sy_mm;
+	q32_t outx = n->target.x_mm - c->target.x_mm, outy = n->target.y_mm - c->target.y_mm;
+	q32_t lin = fx_hypot(inx, iny), lout = fx_hypot(outx, outy);
+	if (lin < TINY_MM || lout < TINY_MM)
+		return;
+	q32_t hin = fx_atan2_deg(iny, inx), hout = fx_atan2_deg(outy, outx);
+	q32_t phi = fx_wrap_deg(hout - hin);
+	if (fx_abs64(phi) < TINY_DEG) {
+		/* Collinear: pass straight through at full speed. */
+		c->corner = (traj_corner_t){0};
+		c->corner.k_mm_deg = INT64_MAX / 4;
+		c->corner.vacc_pt = INT64_MAX / 4;
+		c->has_corner = true;
+		backward_pass(m);
+		return;
+	}
+	q32_t t = m->p.cruise_blend_mm;
+	q32_t avail_in = lin;
+	if (i > 0) {
+		motion_cmd_t *p = q_at(m, (uint8_t)(i - 1));
+		if (p->kind == MCMD_CRUISE && p->has_corner)
+			avail_in -= p->corner.t_mm;
+	}
+	t = fx_min64(t, avail_in);
+	t = fx_min64(t, lout / 2);
+	q32_t rem = 0;
+	bool executing = (i == 0) && head_line_remaining(m, &rem);
+	if (executing)
+		t = fx_min64(t, rem - m->v - m->v_t_pt);
+	traj_corner_t corner;
+	if (t <= TINY_MM || !traj_corner_plan(&corner, phi, t, m->a_r_pt2))
+		return;
+	c->corner = corner;
+	c->has_corner = true;
+	backward_pass(m);
+	if (executing) {
+		/* Can the unit still slow to the corner speed before it begins? */
+		q32_t d = rem - corner.t_mm;
+		if (traj_reach(d, c->vend_pt, m->a_t_pt2) < m->v) {
+			c->has_corner = false;
+			backward_pass(m);
+			return;
+		}
+		m->seg.len -= corner.t_mm;
+	}
+}
+
+bool motion_cruise_abs(motion_t *m, q32_t x_mm, q32_t y_mm)
+{
+	motion_cmd_t c = {0};
+	c.kind = MCMD_CRUISE;
+	c.target.x_mm = x_mm;
+	c.target.y_mm = y_mm;
+	c.start_known = tail_end(m, &c.sx_mm, &c.sy_mm);
+	if (!push(m, &c))
+		return false;
+	if (m->q_count >= 2)
+		plan_corner(m, (uint8_t)(m->q_count - 2));
+	backward_pass(m);
+	return true;
+}
+
+/* ---- velocity modes --------------------------------------------------- */
+
+static bool velocity_mode_allowed(const motion_t *m)
+{
+	return m->mode == MODE_IDLE || m->mode == MODE_JOG || m->mode == MODE_CONTINUOUS;
+}
+
+bool motion_jog(motion_t *m, q32_t vx, q32_t vy, q32_t w)
+{
+	if (!velocity_mode_allowed(m) || m->q_count > 0 || m->stopping || m->paused)
+		return false;
+	int64_t hz = m->p.tick_hz;
+	m->vtarget.vx_pt = vx / hz;
+	m->vtarget.vy_pt = vy / hz;
+	m->vtarget.w_pt = w / hz;
+	m->jog_age_ticks = 0;
+	m->mode = MODE_JOG;
+	return true;
+}
+
+bool motion_continuous_rel(motion_t *m, const fx_pose_t *rel)
+{
+	if (!velocity_mode_allowed(m) || m->q_count > 0 || m->stopping)
+		return false;
+	fx_pose_t t = m->ref;
+	q32_t dx, dy;
+	body_to_world(m->ref.th_deg, rel->x_mm, rel->y_mm, &dx, &dy);
+	t.x_mm += dx;
+	t.y_mm += dy;
+	t.th_deg = fx_wrap_deg(m->ref.th_deg + rel->th_deg);
+	m->goal = t;
+	m->goal_position_done = false;
+	m->mode = MODE_CONTINUOUS;
+	return true;
+}
+
+void motion_joystick_enable(motion_t *m, bool on)
+{
+	m->joystick = on;
+	if (on) {
+		if (m->mode == MODE_IDLE || m->mode == MODE_JOG || m->mode == MODE_CONTINUOUS)
+			m->mode = MODE_JOYSTICK;
+		m->vtarget = (fx_twist_t){0};
+	} else if (m->mode == MODE_JOYSTICK) {
+		/* Decelerate at the acceleration limit, then idle. */
+		m->vtarget = (fx_twist_t){0};
+		m->stopping = true;
+	}
+}
+
+void motion_joystick_input(motion_t *m, int16_t x, int16_t y, int16_t r, bool present)
+{
+	if (m->mode != MODE_JOYSTICK || m->stopping)
+		return;
+	if (!present) {
+		m->vtarget = (fx_twist_t){0};
+		return;
+	}
+	m->vtarget.vx_pt = vt_eff(m) / 32767 * x;
+	m->vtarget.vy_pt = m->p.kin == MOTION_KIN_OMNI ? vt_eff(m) / 32767 * y : 0;
+	m->vtarget.w_pt = m->v_r_pt / 32767 * r;
+}
+
+/* ---- pause / stop ---------------------------------------------------- */
+
+void motion_pause(motion_t *m)
+{
+	m->paused = true;
+	if (m->mode == MODE_JOG || m->mode == MODE_JOYSTICK)
+		m->vtarget = (fx_twist_t){0};
+}
+
+void motion_resume(motion_t *m) { m->paused = false; }
+
+void motion_stop(motion_t *m)
+{
+	m->q_count = 0;
+	m->stopping = true;
+	m->vtarget = (fx_twist_t){0};
+}
+
+void motion_halt(motion_t *m)
+{
+	m->q_count = 0;
+	m->seg.kind = SEG_NONE;
+	m->v = 0;
+	m->vel = (fx_twist_t){0};
+	m->vtarget = (fx_twist_t){0};
+	m->stopping = false;
+	m->paused = false;
+	m->mode = m->joystick ? MODE_JOYSTICK : MODE_IDLE;
+}
+
+/* ---- path execution -------------------------------------------------- */
+
+static void seg_line(motion_t *m, const fx_pose_t *from, q32_t tx, q32_t ty, q32_t th_end)
+{
+	seg_t *g = &m->seg;
+	*g = (seg_t){0};
+	g->kind = SEG_LINE;
+	g->p0 = *from;
+	q32_t dx = tx - from->x_mm, dy = ty - from->y_mm;
+	g->len = fx_hypot(dx, dy);
+	if (g->len > 0) {
+		g->ux = (int32_t)(fx_div(dx, g->len) >> 2);
+		g->uy = (int32_t)(fx_div(dy, g->len) >> 2);
+	}
+	g->p_end.x_mm = tx;
+	g->p_end.y_mm = ty;
+	g->dth = fx_wrap_deg(th_end - from->th_deg);
+	g->p_end.th_deg = fx_wrap_deg(from->th_deg + g->dth);
+	if (g->dth != 0)
+		g->omni_k = fx_div(g->len, fx_abs64(g->dth));
+}
+
+static void seg_turn(motion_t *m, q32_t angle)
+{
+	seg_t *g = &m->seg;
+	*g = (seg_t){0};
+	g->kind = SEG_TURN;
+	g->p0 = m->ref;
+	g->dir = angle < 0 ? -1 : 1;
+	g->len = fx_abs64(angle);
+	g->p_end = m->ref;
+	g->p_end.th_deg = fx_wrap_deg(m->ref.th_deg + angle);
+}
+
+/* Sets up the next piece of the head command; false when it is finished. */
+static bool next_piece(motion_t *m)
+{
+	motion_cmd_t *c = q_at(m, 0);
+	fx_pose_t *r = &m->ref;
+	for (;;) {
+		switch (c->kind) {
+		case MCMD_FORWARD:
+			if (c->stage++ > 0)
+				return false;
+			seg_line(m, r, c->target.x_mm, c->target.y_mm, r->th_deg);
+			if (m->seg.len < TINY_MM)
+				continue;
+			return true;
+		case MCMD_TURN:
+			if (c->stage++ > 0)
+				return false;
+			if (fx_abs64(c->angle_deg) < 1)
+				continue;
+			seg_turn(m, c->angle_deg);
+			return true;
+		case MCMD_ARC: {
+			if (c->stage++ > 0)
+				return false;
+			seg_t *g = &m->seg;
+			*g = (seg_t){0};
+			g->kind = SEG_ARC;
+			g->p0 = *r;
+			g->cx = c->cx_mm;
+			g->cy = c->cy_mm;
+			g->dir = c->angle_deg < 0 ? -1 : 1;
+			g->len = fx_abs64(c->angle_deg);
+			g->p_end = c->target;
+			q32_t radius = fx_hypot(r->x_mm - c->cx_mm, r->y_mm - c->cy_mm);
+			g->arc_k = fx_mul(radius, DEG_TO_RAD_Q32);
+			/* Rigid rotation about the centre c (body frame): the body
+			 * moves at w x (-c) = w (c.y, -c.x). */
+			g->arc_kx = fx_mul(c->sy_mm, DEG_TO_RAD_Q32);
+			g->arc_ky = -fx_mul(c->sx_mm, DEG_TO_RAD_Q32);
+			if (g->len < 1)
+				continue;
+			return true;
+		}
+		case MCMD_LINE: {
+			q32_t dx = c->target.x_mm - r->x_mm, dy = c->target.y_mm - r->y_mm;
+			q32_t dist = fx_hypot(dx, dy);
+			if (m->p.kin == MOTION_KIN_OMNI) {
+				if (c->stage++ > 0)
+					return false;
+				if (dist < TINY_MM) {
+					q32_t a = fx_wrap_deg(c->target.th_deg - r->th_deg);
+					if (fx_abs64(a) < 1)
+						continue;
+					seg_turn(m, a);
+					return true;
+				}
+				seg_line(m, r, c->target.x_mm, c->target.y_mm, c->target.th_deg);
+				return true;
+			}
+			switch (c->stage++) {
+			case 0: {
+				if (dist < TINY_MM)
+					continue;
+				q32_t a = fx_wrap_deg(fx_atan2_deg(dy, dx) - r->th_deg);
+				if (fx_abs64(a) < 1)
+					continue;
+				seg_turn(m, a);
+				return true;
+			}
+			case 1:
+				if (dist < TINY_MM)
+					continue;
+				seg_line(m, r, c->target.x_mm, c->target.y_mm, r->th_deg);
+				return true;
+			case 2: {
+				q32_t a = fx_wrap_deg(c->target.th_deg - r->th_deg);
+				if (!c->has_heading || fx_abs64(a) < 1)
+					continue;
+				seg_turn(m, a);
+				return true;
+			}
+			default:
+				return false;
+			}
+		}
+		case MCMD_CRUISE:
+			switch (c->stage++) {
+			case 0: {
+				if (!c->start_known) {
+					c->sx_mm = r->x_mm;
+					c->sy_mm = r->y_mm;
+					c->start_known = true;
+					if (m->q_count >= 2)
+						plan_corner(m, 0);
+				}
+				if (m->v > 0)
+					continue; /* arriving out of a corner, already aligned */
+				q32_t dx = c->target.x_mm - r->x_mm, dy = c->target.y_mm - r->y_mm;
+				if (fx_hypot(dx, dy) < TINY_MM)
+					continue;
+				q32_t a = fx_wrap_deg(fx_atan2_deg(dy, dx) - r->th_deg);
+				if (fx_abs64(a) < 1)
+					continue;
+				seg_turn(m, a);
+				return true;
+			}
+			case 1: {
+				q32_t tx = c->target.x_mm, ty = c->target.y_mm;
+				q32_t dx = tx - c->sx_mm, dy = ty - c->sy_mm;
+				q32_t l = fx_hypot(dx, dy);
+				if (l < TINY_MM)
+					continue;
+				seg_line(m, r, tx, ty, r->th_deg);
+				m->seg.p_end.th_deg = r->th_deg;
+				m->seg.dth = 0;
+				if (c->has_corner)
+					m->seg.len -= c->corner.t_mm;
+				if (m->seg.len < 0)
+					m->seg.len = 0;
+				/* The line ends at the corner entry: stay exactly on it. */
+				m->seg.p_end.x_mm = tx - fx_mul_q30(c->corner.t_mm, m->seg.ux);
+				m->seg.p_end.y_mm = ty - fx_mul_q30(c->corner.t_mm, m->seg.uy);
+				if (!c->has_corner) {
+					m->seg.p_end.x_mm = tx;
+					m->seg.p_end.y_mm = ty;
+				}
+				return true;
+			}
+			case 2: {
+				if (!c->has_corner || c->corner.lh_mm == 0)
+					continue;
+				seg_t *g = &m->seg;
+				int32_t ux = g->ux, uy = g->uy;
+				*g = (seg_t){0};
+				g->kind = SEG_CORNER;
+				g->p0 = *r;
+				g->ux = ux;
+				g->uy = uy;
+				g->corner = c->corner;
+				g->len = 2 * c->corner.lh_mm;
+				/* Exit: the waypoint plus the tangent length along the new line. */
+				q32_t th_out = fx_wrap_deg(r->th_deg + c->corner.phi_deg);
+				uint32_t b = fx_deg_to_bam(th_out);
+				g->p_end.x_mm = c->target.x_mm + fx_mul_q30(c->corner.t_mm, fx_cos_bam(b));
+				g->p_end.y_mm = c->target.y_mm + fx_mul_q30(c->corner.t_mm, fx_sin_bam(b));
+				g->p_end.th_deg = th_out;
+				return true;
+			}
+			default:
+				return false;
+			}
+		default:
+			return false;
+		}
+	}
+}
+
+/* Speed cap and acceleration of the active piece. */
+static void piece_limits(const motion_t *m, q32_t *vmax, q32_t *a)
+{
+	const seg_t *g = &m->seg;
+	switch (g->kind) {
+	case SEG_TURN:
+		*vmax = m->v_r_pt;
+		*a = m->a_r_pt2;
+		break;
+	case SEG_ARC: {
+		q32_t vt = fx_div(vt_eff(m), g->arc_k), at = fx_div(m->a_t_pt2, g->arc_k);
+		*vmax = fx_min64(m->v_r_pt, vt);
+		*a = fx_min64(m->a_r_pt2, at);
+		break;
+	}
+	case SEG_LINE:
+		*vmax = vt_eff(m);
+		*a = m->a_t_pt2;
+		if (g->dth != 0) {
+			*vmax = fx_min64(*vmax, fx_mul(m->v_r_pt, g->omni_k));
+			*a = fx_min64(*a, fx_mul(m->a_r_pt2, g->omni_k));
+		}
+		break;
+	case SEG_CORNER:
+		*vmax = corner_cap(m, q_at((motion_t *)m, 0));
+		*a = fx_min64(m->a_t_pt2, g->corner.acc_pt2);
+		break;
+	default:
+		*vmax = 0;
+		*a = m->a_t_pt2;
+	}
+	if (*a < 1)
+		*a = 1;
+}
+
+/* Distance the profile must be able to stop within, for the active piece. */
+static q32_t piece_horizon(motion_t *m, q32_t a)
+{
+	seg_t *g = &m->seg;
+	q32_t rem = g->len - g->s;
+	if (m->q_count == 0)
+		return rem;
+	motion_cmd_t *c = q_at(m, 0);
+	if (c->kind != MCMD_CRUISE || !c->has_corner)
+		return rem;
+	if (g->kind == SEG_LINE)
+		return rem + traj_brake_dist(c->vend_pt, a) + c->vend_pt;
+	if (g->kind == SEG_CORNER && m->q_count >= 2) {
+		motion_cmd_t *n = q_at(m, 1);
+		q32_t after = cruise_line_len(m, 1);
+		q32_t nv = (n->kind == MCMD_CRUISE && n->has_corner) ? n->vend_pt : 0;
+		return rem + after + traj_brake_dist(nv, a) + nv;
+	}
+	return rem;
+}
+
+/* Reference pose at progress s along the active piece. */
+static void piece_pose(motion_t *m, q32_t s_old, q32_t s, fx_pose_t *out)
+{
+	seg_t *g = &m->seg;
+	*out = m->ref;
+	switch (g->kind) {
+	case SEG_LINE:
+		out->x_mm = g->p0.x_mm + fx_mul_q30(s, g->ux);
+		out->y_mm = g->p0.y_mm + fx_mul_q30(s, g->uy);
+		if (g->dth != 0)
+			out->th_deg = fx_wrap_deg(g->p0.th_deg + fx_div(s, g->omni_k));
+		break;
+	case SEG_TURN:
+		out->th_deg = fx_wrap_deg(g->p0.th_deg + g->dir * s);
+		break;
+	case SEG_ARC: {
+		uint32_t b = fx_deg_to_bam(g->dir * s);
+		int32_t co = fx_cos_bam(b), si = fx_sin_bam(b);
+		q32_t rx = g->p0.x_mm - g->cx, ry = g->p0.y_mm - g->cy;
+		out->x_mm = g->cx + fx_mul_q30(rx, co) - fx_mul_q30(ry, si);
+		out->y_mm = g->cy + fx_mul_q30(rx, si) + fx_mul_q30(ry, co);
+		out->th_deg = fx_wrap_deg(g->p0.th_deg + g->dir * s);
+		break;
+	}
+	case SEG_CORNER: {
+		/* Heading is exact along the clothoids; position integrates the
+		 * step at the midpoint heading. */
+		q32_t ds = s - s_old;
+		q32_t th_mid = g->p0.th_deg + traj_corner_heading(&g->corner, s_old + ds / 2);
+		uint32_t b = fx_deg_to_bam(th_mid);
+		out->x_mm = m->ref.x_mm + fx_mul_q30(ds, fx_cos_bam(b));
+		out->y_mm = m->ref.y_mm + fx_mul_q30(ds, fx_sin_bam(b));
+		out->th_deg = fx_wrap_deg(g->p0.th_deg + traj_corner_heading(&g->corner, s));
+		break;
+	}
+	default:
+		break;
+	}
+}
+
+/* Body twist that carries the reference from a to b (midpoint heading). */
+static void twist_between(const motion_t *m, const fx_pose_t *a, const fx_pose_t *b, fx_twist_t *t)
+{
+	q32_t dth = fx_wrap_deg(b->th_deg - a->th_deg);
+	q32_t dx = b->x_mm - a->x_mm, dy = b->y_mm - a->y_mm;
+	uint32_t mid = fx_deg_to_bam(a->th_deg + dth / 2);
+	int32_t c = fx_cos_bam(mid), s = fx_sin_bam(mid);
+	t->vx_pt = fx_mul_q30(dx, c) + fx_mul_q30(dy, s);
+	t->vy_pt = m->p.kin == MOTION_KIN_OMNI ? fx_mul_q30(dy, c) - fx_mul_q30(dx, s) : 0;
+	t->w_pt = dth;
+}
+
+/* True when the piece just finished flows into the next without stopping. */
+static bool blends_onward(motion_t *m, uint8_t finished_kind)
+{
+	if (m->q_count == 0)
+		return false;
+	motion_cmd_t *c = q_at(m, 0);
+	if (c->kind != MCMD_CRUISE || !c->has_corner)
+		return false;
+	return finished_kind == SEG_LINE || finished_kind == SEG_CORNER;
+}
+
+static void path_tick(motion_t *m, fx_twist_t *out)
+{
+	bool braking = m->paused || m->stopping;
+	if (braking && m->v == 0) {
+		if (m->stopping) {
+			m->stopping = false;
+			m->q_count = 0;
+			m->seg.kind = SEG_NONE;
+			m->mode = MODE_IDLE;
+		}
+		*out = (fx_twist_t){0};
+		return;
+	}
+	fx_pose_t start = m->ref;
+	q32_t budget = -1;
+	for (;;) {
+		if (m->seg.kind == SEG_NONE) {
+			if (m->q_count == 0) {
+				m->mode = MODE_IDLE;
+				m->v = 0;
+				break;
+			}
+			if (!next_piece(m)) {
+				pop(m);
+				continue;
+			}
+			m->seg.s = 0;
+		}
+		if (budget < 0) {
+			q32_t vmax, a;
+			piece_limits(m, &vmax, &a);
+			q32_t u = traj_step(m->v, piece_horizon(m, a), vmax, a);
+			if (braking) {
+				/* Stop at the acceleration limit, along the path. */
+				q32_t amax = m->amax_t_pt2;
+				if (m->seg.kind == SEG_TURN)
+					amax = m->amax_r_pt2;
+				else if (m->seg.kind == SEG_ARC)
+					amax = fx_min64(m->amax_r_pt2, fx_div(m->amax_t_pt2, m->seg.arc_k));
+				u = fx_min64(u, fx_max64(m->v - amax, 0));
+			}
+			budget = u;
+			m->v = u;
+		}
+		q32_t rem = m->seg.len - m->seg.s;
+		if (budget < rem) {
+			fx_pose_t next;
+			piece_pose(m, m->seg.s, m->seg.s + budget, &next);
+			m->seg.s += budget;
+			m->ref = next;
+			if (m->seg.kind == SEG_ARC) {
+				/* Exact rates; the pose itself is analytic. */
+				q32_t w = m->seg.dir * budget;
+				out->vx_pt = fx_mul(w, m->seg.arc_kx);
+				out->vy_pt = fx_mul(w, m->seg.arc_ky);
+				out->w_pt = w;
+				return;
+			}
+			break;
+		}
+		/* Piece complete: land exactly on its end. */
+		m->ref = m->seg.p_end;
+		budget -= rem;
+		uint8_t kind = m->seg.kind;
+		m->seg.kind = SEG_NONE;
+		if (!blends_onward(m, kind)) {
+			/* A stop: the last step covered the exact remainder (< a). */
+			m->v = 0;
+			break;
+		}
+		if (budget == 0)
+			break;
+	}
+	twist_between(m, &start, &m->ref, out);
+}
+
+/* Move x toward target by at most step. */
+static q32_t slew(q32_t x, q32_t target, q32_t step)
+{
+	if (target > x + step)
+		return x + step;
+	if (target < x - step)
+		return x - step;
+	return target;
+}
+
+static bool twist_zero(const fx_twist_t *t) { return t->vx_pt == 0 && t->vy_pt == 0 && t->w_pt == 0; }
+
+/* Jog and joystick: slew toward the target velocity. */
+static void velocity_tick(motion_t *m, fx_twist_t *out)
+{
+	bool braking = m->stopping || m->paused;
+	fx_twist_t tgt = m->vtarget;
+	q32_t at = m->a_t_pt2, ar = m->a_r_pt2;
+	if (m->mode == MODE_JOG && ++m->jog_age_ticks > m->jog_timeout_ticks)
+		tgt = (fx_twist_t){0};
+	if (braking) {
+		tgt = (fx_twist_t){0};
+		at = m->amax_t_pt2;
+		ar = m->amax_r_pt2;
+	}
+	/* Caution cap and set velocity bound the target. */
+	q32_t vt = vt_eff(m);
+	tgt.vx_pt = fx_clamp64(tgt.vx_pt, -vt, vt);
+	tgt.vy_pt = fx_clamp64(tgt.vy_pt, -vt, vt);
+	tgt.w_pt = fx_clamp64(tgt.w_pt, -m->v_r_pt, m->v_r_pt);
+	m->vel.vx_pt = slew(m->vel.vx_pt, tgt.vx_pt, at);
+	m->vel.vy_pt = slew(m->vel.vy_pt, tgt.vy_pt, at);
+	m->vel.w_pt = slew(m->vel.w_pt, tgt.w_pt, ar);
+	*out = m->vel;
+	if (twist_zero(&m->vel) && twist_zero(&tgt)) {
+		if (m->mode == MODE_JOG && (m->jog_age_ticks > m->jog_timeout_ticks || braking ||
+					    twist_zero(&m->vtarget))) {
+			m->mode = MODE_IDLE;
+			m->stopping = false;
+		} else if (m->mode == MODE_JOYSTICK && m->stopping) {
+			m->mode = MODE_IDLE;
+			m->stopping = false;
+		}
+	}
+}
+
+/* Continuous mode: drive toward the goal with slewed velocities. */
+static void continuous_tick(motion_t *m, fx_twist_t *out)
+{
+	bool braking = m->stopping || m->paused;
+	fx_twist_t want = {0};
+	q32_t dx = m->goal.x_mm - m->ref.x_mm, dy = m->goal.y_mm - m->ref.y_mm;
+	q32_t dist = fx_hypot(dx, dy);
+	if (!m->goal_position_done && dist < TINY_MM && fx_abs64(m->vel.vx_pt) == 0 &&
+	    m->vel.vy_pt == 0)
+		m->goal_position_done = true;
+	if (!m->goal_position_done) {
+		q32_t bearing = fx_atan2_deg(dy, dx);
+		q32_t e = fx_wrap_deg(bearing - m->ref.th_deg);
+		if (m->p.kin == MOTION_KIN_OMNI) {
+			q32_t sp = fx_min64(traj_umax(dist, m->a_t_pt2), vt_eff(m));
+			uint32_t b = fx_deg_to_bam(e);
+			want.vx_pt = fx_mul_q30(sp, fx_cos_bam(b));
+			want.vy_pt = fx_mul_q30(sp, fx_sin_bam(b));
+		} else {
+			/* Turn toward the goal; translate along the projected distance. */
+			q32_t ae = fx_abs64(e);
+			q32_t wr = fx_min64(traj_umax(ae, m->a_r_pt2), m->v_r_pt);
+			want.w_pt = e < 0 ? -wr : wr;
+			uint32_t b = fx_deg_to_bam(e);
+			q32_t proj = fx_mul_q30(dist, fx_cos_bam(b));
+			if (proj > 0 && ae < fx_from_int(45))
+				want.vx_pt = fx_min64(traj_umax(proj, m->a_t_pt2), vt_eff(m));
+			if (dist < m->v_t_pt && ae < fx_from_int(1))
+				want.w_pt = 0;
+		}
+	} else {
+		q32_t e = fx_wrap_deg(m->goal.th_deg - m->ref.th_deg);
+		q32_t wr = fx_min64(traj_umax(fx_abs64(e), m->a_r_pt2), m->v_r_pt);
+		want.w_pt = e < 0 ? -wr : wr;
+	}
+	q32_t at = m->a_t_pt2, ar = m->a_r_pt2;
+	if (braking) {
+		want = (fx_twist_t){0};
+		at = m->amax_t_pt2;
+		ar = m->amax_r_pt2;
+	}
+	q32_t prev_vx = m->vel.vx_pt;
+	m->vel.vx_pt = slew(m->vel.vx_pt, want.vx_pt, at);
+	m->vel.vy_pt = slew(m->vel.vy_pt, want.vy_pt, at);
+	m->vel.w_pt = slew(m->vel.w_pt, want.w_pt, ar);
+	/* Never step past the goal: the last step covers the exact remainder. */
+	if (!m->goal_position_done && m->vel.vx_pt > dist && m->p.kin == MOTION_KIN_DIFF)
+		m->vel.vx_pt = fx_max64(dist, prev_vx - at);
+	*out = m->vel;
+	odom_integrate(&m->ref, out);
+	if (m->goal_position_done) {
+		q32_t e = fx_wrap_deg(m->goal.th_deg - m->ref.th_deg);
+		if (fx_abs64(e) <= fx_abs64(m->vel.w_pt) && fx_abs64(m->vel.w_pt) <= ar) {
+			/* Final step: land on the goal heading exactly. */
+			m->ref.th_deg = m->goal.th_deg;
+			m->vel = (fx_twist_t){0};
+			m->mode = MODE_IDLE;
+		}
+	} else if (fx_hypot(m->goal.x_mm - m->ref.x_mm, m->goal.y_mm - m->ref.y_mm) < TINY_MM &&
+		   m->vel.vx_pt <= at) {
+		m->ref.x_mm = m->goal.x_mm;
+		m->ref.y_mm = m->goal.y_mm;
+		m->vel.vx_pt = 0;
+		m->vel.vy_pt = 0;
+		m->goal_position_done = true;
+	}
+	if (braking && twist_zero(&m->vel)) {
+		if (m->stopping) {
+			m->stopping = false;
+			m->mode = MODE_IDLE;
+		}
+	}
+}
+
+void motion_tick(motion_t *m, const fx_pose_t *measured, fx_twist_t *out)
+{
+	*out = (fx_twist_t){0};
+	switch (m->mode) {
+	case MODE_PATH:
+		path_tick(m, out);
+		m->vel = *out;
+		break;
+	case MODE_JOG:
+	case MODE_JOYSTICK:
+		velocity_tick(m, out);
+		odom_integrate(&m->ref, out);
+		break;
+	case MODE_CONTINUOUS:
+		continuous_tick(m, out);
+		break;
+	default:
+		m->stopping = false;
+		m->vel = (fx_twist_t){0};
+		/* Idle: follow the measured pose so relative moves start from it. */
+		if (measured)
+			m->ref = *measured;
+		break;
+	}
+	/* A velocity mode that ended hands over to queued path commands. */
+	if (m->mode == MODE_IDLE && m->q_count > 0)
+		m->mode = MODE_PATH;
+	if (m->mode == MODE_IDLE && m->joystick)
+		m->mode = MODE_JOYSTICK;
+}
+
+bool motion_is_moving(const motion_t *m) { return !twist_zero(&m->vel) || m->v != 0; }
+
+bool motion_has_work(const motion_t *m)
+{
+	return m->mode != MODE_IDLE && !(m->mode == MODE_JOYSTICK && !motion_is_moving(m)) ? true
+											    : motion_is_moving(m);
+}
+
+bool motion_is_paused(const motion_t *m) { return m->paused; }
+uint8_t motion_queue_len(const motion_t *m) { return m->q_count; }
+uint8_t motion_mode(const motion_t *m) { return m->mode; }

@@ -1,0 +1,138 @@
+/* Trajectory generation (derivation in traj.h). */
+#include "traj.h"
+
+/* T(n) = a n (n + 1) / 2 */
+static q32_t tri(int64_t n, q32_t a) { return (n * (n + 1) / 2) * a; }
+
+q32_t traj_brake_dist(q32_t u, q32_t a)
+{
+	if (u <= 0 || a <= 0)
+		return 0;
+	int64_t n = u / a;
+	return n * u - tri(n, a);
+}
+
+static q32_t g_of(q32_t u, q32_t a) { return u + traj_brake_dist(u, a); }
+
+q32_t traj_umax(q32_t d, q32_t a)
+{
+	if (d <= 0)
+		return 0;
+	if (a <= 0)
+		return d;
+	/* n ~ sqrt(2 d / a), then correct by whole steps. */
+	uint64_t q = (uint64_t)(d / a);
+	int64_t n = (int64_t)fx_isqrt64(2 * q);
+	while (n > 0 && tri(n, a) > d)
+		n--;
+	while (tri(n + 1, a) <= d)
+		n++;
+	return (d + tri(n, a)) / (n + 1);
+}
+
+q32_t traj_step(q32_t v, q32_t d, q32_t vmax, q32_t a)
+{
+	q32_t cand = v + a;
+	if (cand > vmax)
+		cand = fx_max64(vmax, v - a);
+	if (cand < 0)
+		cand = 0;
+	if (g_of(cand, a) <= d)
+		return cand;
+	q32_t u = traj_umax(d, a);
+	/* The invariant keeps u >= v - a unless the limits were lowered under
+	 * the unit; braking harder than a is never chosen. */
+	if (u < v - a)
+		u = v - a;
+	return u;
+}
+
+q32_t traj_reach(q32_t d, q32_t c, q32_t a)
+{
+	if (d < 0)
+		d = 0;
+	return traj_umax(d + traj_brake_dist(c, a) + c, a);
+}
+
+q32_t fx_div(q32_t a, q32_t b)
+{
+	if (b == 0)
+		return a >= 0 ? INT64_MAX : INT64_MIN;
+	bool neg = (a < 0) != (b < 0);
+	uint64_t ua = (uint64_t)fx_abs64(a), ub = (uint64_t)fx_abs64(b);
+	uint64_t q = ua / ub, r = ua % ub;
+	if (q >> 31)
+		return neg ? INT64_MIN : INT64_MAX;
+	uint64_t res = q << 32;
+	/* Long division for the 32 fraction bits. */
+	for (int i = 31; i >= 0; i--) {
+		r <<= 1;
+		if (r >= ub) {
+			r -= ub;
+			res |= (uint64_t)1 << i;
+		}
+	}
+	return neg ? -(int64_t)res : (int64_t)res;
+}
+
+/* Unit clothoid half with total turn psi: end point (x1, y1), Q30. */
+static void clothoid_half(q32_t psi_deg, int64_t *x1, int64_t *y1)
+{
+	enum { N = 64 };
+	int64_t sx = 0, sy = 0;
+	for (int i = 0; i <= N; i++) {
+		/* heading psi * (i/N)^2 */
+		q32_t th = (psi_deg / (N * N)) * i * i;
+		uint32_t b = fx_deg_to_bam(th);
+		int64_t w = (i == 0 || i == N) ? 1 : ((i & 1) ? 4 : 2);
+		sx += w * fx_cos_bam(b);
+		sy += w * fx_sin_bam(b);
+	}
+	*x1 = sx / (3 * N);
+	*y1 = sy / (3 * N);
+}
+
+bool traj_corner_plan(traj_corner_t *c, q32_t phi_deg, q32_t t_avail_mm, q32_t ar_pt2)
+{
+	q32_t aphi = fx_abs64(phi_deg);
+	if (aphi > fx_from_int(170) || t_avail_mm <= 0 || ar_pt2 <= 0)
+		return false;
+	q32_t psi = aphi / 2;
+	int64_t x1, y1;
+	clothoid_half(psi, &x1, &y1);
+	uint32_t b = fx_deg_to_bam(psi);
+	int64_t sn = fx_sin_bam(b), cs = fx_cos_bam(b);
+	/* T / Lh = x1 + y1 tan(psi), Q30 */
+	int64_t ratio = x1 + (y1 * sn) / cs;
+	c->phi_deg = phi_deg;
+	c->t_mm = t_avail_mm;
+	c->lh_mm = fx_div(t_avail_mm, ratio * 4); /* ratio is Q30; times 4 makes it Q32 */
+	if (c->lh_mm <= 0)
+		return false;
+	c->k_mm_deg = fx_div(c->lh_mm, aphi);
+	/* sqrt(ar / (2 phi)) in 1/tick, Q32 */
+	q32_t ratio_q32 = fx_div(ar_pt2, 2 * aphi);
+	q32_t rt = ratio_q32 < ((q32_t)1 << 31) ? (q32_t)fx_isqrt64((uint64_t)ratio_q32 << 32)
+						  : (q32_t)fx_isqrt64((uint64_t)ratio_q32) << 16;
+	c->vacc_pt = fx_mul(c->lh_mm, rt);
+	c->acc_pt2 = fx_mul(ar_pt2, c->k_mm_deg) / 2;
+	return true;
+}
+
+q32_t traj_corner_heading(const traj_corner_t *c, q32_t s)
+{
+	q32_t psi = c->phi_deg / 2;
+	q32_t lh = c->lh_mm;
+	if (s <= 0)
+		return 0;
+	if (s >= 2 * lh)
+		return c->phi_deg;
+	if (s <= lh) {
+		int64_t u = fx_div(s, lh) >> 2; /* Q30 */
+		int32_t u2 = (int32_t)((u * u) >> 30);
+		return fx_mul_q30(psi, u2);
+	}
+	int64_t u = fx_div(2 * lh - s, lh) >> 2;
+	int32_t u2 = (int32_t)((u * u) >> 30);
+	return c->phi_deg - fx_mul_q30(psi, u2);
+}

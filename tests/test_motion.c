@@ -1,0 +1,261 @@
+/* Motion engine on its own: exact endpoints, limits, blending, modes.
+ * The reference pose is fed back as the measured pose (a perfect plant). */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#include <cmocka.h>
+
+#include "firmware/kin.h"
+#include "firmware/motion.h"
+
+#define HZ 1000
+static const double Q = 4294967296.0;
+
+static q32_t q(double v) { return (q32_t)llround(v * Q); }
+static double d(q32_t v) { return (double)v / Q; }
+
+typedef struct {
+	motion_t m;
+	/* Per-tick history of the commanded body velocity (per second). */
+	double vx, w, ax_max, aw_max, v_max, w_max;
+	uint32_t ticks;
+} rig_t;
+
+static void rig_init(rig_t *r, motion_kin_t kin)
+{
+	motion_params_t p = {
+		.tick_hz = HZ,
+		.kin = kin,
+		.vel_limit_t = q(1000),
+		.vel_limit_r = q(180),
+		.acc_limit_t = q(1000),
+		.acc_limit_r = q(360),
+		.cruise_blend_mm = q(200),
+	};
+	*r = (rig_t){0};
+	motion_init(&r->m, &p);
+	motion_set_velocity(&r->m, q(500), q(90));
+	motion_set_accel(&r->m, q(500), q(180));
+}
+
+static void rig_tick(rig_t *r)
+{
+	fx_twist_t t;
+	fx_pose_t meas = r->m.ref;
+	motion_tick(&r->m, &meas, &t);
+	double vx = hypot(d(t.vx_pt), d(t.vy_pt)) * HZ, w = d(t.w_pt) * HZ;
+	double ax = fabs(vx - r->vx) * HZ, aw = fabs(w - r->w) * HZ;
+	if (ax > r->ax_max)
+		r->ax_max = ax;
+	if (aw > r->aw_max)
+		r->aw_max = aw;
+	if (fabs(vx) > r->v_max)
+		r->v_max = fabs(vx);
+	if (fabs(w) > r->w_max)
+		r->w_max = fabs(w);
+	r->vx = vx;
+	r->w = w;
+	r->ticks++;
+}
+
+static void run_until_idle(rig_t *r, uint32_t max_ticks)
+{
+	for (uint32_t i = 0; i < max_ticks; i++) {
+		rig_tick(r);
+		if (!motion_has_work(&r->m))
+			return;
+	}
+	fail_msg("still moving after %u ticks", max_ticks);
+}
+
+static void test_forward_lands_exactly(void **state)
+{
+	(void)state;
+	rig_t r;
+	rig_init(&r, MOTION_KIN_DIFF);
+	assert_true(motion_forward(&r.m, q(10000)));
+	run_until_idle(&r, 30000);
+	assert_int_equal(r.m.ref.x_mm, q(10000));
+	assert_int_equal(r.m.ref.y_mm, 0);
+	assert_int_equal(r.m.ref.th_deg, 0);
+	assert_true(r.v_max <= 500.0);
+	assert_true(r.ax_max <= 500.0 * 1.0000001);
+	/* 10 m at 500 mm/s with 500 mm/s^2 ramps: 20 s + 1 s. */
+	assert_in_range(r.ticks, 20990, 21010);
+}
+
+static void test_turn_full_circle(void **state)
+{
+	(void)state;
+	rig_t r;
+	rig_init(&r, MOTION_KIN_DIFF);
+	assert_true(motion_turn(&r.m, q(360)));
+	run_until_idle(&r, 30000);
+	assert_int_equal(r.m.ref.th_deg, 0);
+	assert_int_equal(r.m.ref.x_mm, 0);
+	assert_true(r.w_max <= 90.0);
+	assert_true(r.aw_max <= 180.0 * 1.0000001);
+}
+
+static void test_linear_abs_square(void **state)
+{
+	(void)state;
+	rig_t r;
+	rig_init(&r, MOTION_KIN_DIFF);
+	double pts[4][3] = {{1000, 0, 90}, {1000, 1000, 180}, {0, 1000, -90}, {0, 0, 0}};
+	for (int i = 0; i < 4; i++) {
+		fx_pose_t p = {q(pts[i][0]), q(pts[i][1]), q(pts[i][2])};
+		assert_true(motion_linear_abs(&r.m, &p));
+	}
+	run_until_idle(&r, 60000);
+	assert_true(fabs(d(r.m.ref.x_mm)) < 1e-6);
+	assert_true(fabs(d(r.m.ref.y_mm)) < 1e-6);
+	assert_int_equal(r.m.ref.th_deg, 0);
+	assert_true(r.ax_max <= 500.0 * 1.0000001);
+	assert_true(r.aw_max <= 180.0 * 1.0000001);
+}
+
+static void test_cruise_keeps_moving(void **state)
+{
+	(void)state;
+	rig_t r;
+	rig_init(&r, MOTION_KIN_DIFF);
+	double pts[4][2] = {{1000, 0}, {2000, 1000}, {3000, 1000}, {3000, 2000}};
+	for (int i = 0; i < 4; i++)
+		assert_true(motion_cruise_abs(&r.m, q(pts[i][0]), q(pts[i][1])));
+	double min_speed_mid = 1e9;
+	uint32_t stops = 0;
+	bool started = false;
+	for (uint32_t i = 0; i < 60000 && motion_has_work(&r.m); i++) {
+		rig_tick(&r);
+		if (r.vx > 1)
+			started = true;
+		if (started && motion_has_work(&r.m) && r.vx == 0 && r.w == 0)
+			stops++;
+		double x = d(r.m.ref.x_mm), y = d(r.m.ref.y_mm);
+		/* Near the intermediate waypoints the unit is still moving. */
+		if ((hypot(x - 1000, y) < 150 || hypot(x - 2000, y - 1000) < 150 ||
+		     hypot(x - 3000, y - 1000) < 150) &&
+		    r.vx < min_speed_mid)
+			min_speed_mid = r.vx;
+	}
+	assert_false(motion_has_work(&r.m));
+	printf("cruise: min speed near waypoints %.1f mm/s, ax %.2f aw %.2f, %u ticks\n",
+	       min_speed_mid, r.ax_max, r.aw_max, r.ticks);
+	assert_true(min_speed_mid > 10.0);
+	assert_int_equal(stops, 0);
+	assert_true(fabs(d(r.m.ref.x_mm) - 3000) < 1e-6);
+	assert_true(fabs(d(r.m.ref.y_mm) - 2000) < 1e-6);
+	assert_true(r.ax_max <= 500.0 * 1.01);
+	assert_true(r.aw_max <= 180.0 * 1.01);
+	assert_true(r.w_max <= 90.0 * 1.001);
+}
+
+static void test_jog_watchdog(void **state)
+{
+	(void)state;
+	rig_t r;
+	rig_init(&r, MOTION_KIN_DIFF);
+	motion_set_jog_timeout_ms(&r.m, 200);
+	assert_true(motion_jog(&r.m, q(300), 0, 0));
+	uint32_t t = 0;
+	while (motion_has_work(&r.m) && t < 10000) {
+		rig_tick(&r);
+		t++;
+	}
+	/* 200 ms at speed, then 300 mm/s at 500 mm/s^2: 600 ms more. */
+	assert_true(t <= 200 + 600 + 2);
+	assert_true(r.ax_max <= 500.0 * 1.0000001);
+}
+
+static void test_continuous_retarget(void **state)
+{
+	(void)state;
+	rig_t r;
+	rig_init(&r, MOTION_KIN_DIFF);
+	fx_pose_t g1 = {q(2000), 0, 0};
+	assert_true(motion_continuous_rel(&r.m, &g1));
+	for (int i = 0; i < 1500; i++)
+		rig_tick(&r);
+	fx_pose_t g2 = {q(1000), q(500), 0};
+	assert_true(motion_continuous_rel(&r.m, &g2));
+	run_until_idle(&r, 60000);
+	assert_true(r.ax_max <= 500.0 * 1.0000001);
+	assert_true(r.aw_max <= 180.0 * 1.0000001);
+}
+
+static void test_pause_resume_stop(void **state)
+{
+	(void)state;
+	rig_t r;
+	rig_init(&r, MOTION_KIN_DIFF);
+	assert_true(motion_forward(&r.m, q(2000)));
+	for (int i = 0; i < 1500; i++)
+		rig_tick(&r);
+	motion_pause(&r.m);
+	for (int i = 0; i < 1000; i++)
+		rig_tick(&r);
+	assert_false(motion_is_moving(&r.m));
+	assert_true(motion_has_work(&r.m));
+	motion_resume(&r.m);
+	run_until_idle(&r, 30000);
+	assert_int_equal(r.m.ref.x_mm, q(2000));
+	/* pause decelerates at the limit: 1000 mm/s^2 */
+	assert_true(r.ax_max <= 1000.0 * 1.0000001);
+
+	assert_true(motion_forward(&r.m, q(2000)));
+	for (int i = 0; i < 1500; i++)
+		rig_tick(&r);
+	motion_stop(&r.m);
+	run_until_idle(&r, 2000);
+	assert_int_equal(motion_queue_len(&r.m), 0);
+}
+
+static void test_omni_linear(void **state)
+{
+	(void)state;
+	rig_t r;
+	rig_init(&r, MOTION_KIN_OMNI);
+	fx_pose_t p = {q(500), q(-700), q(45)};
+	assert_true(motion_linear_abs(&r.m, &p));
+	run_until_idle(&r, 30000);
+	assert_int_equal(r.m.ref.x_mm, q(500));
+	assert_int_equal(r.m.ref.y_mm, q(-700));
+	assert_int_equal(r.m.ref.th_deg, q(45));
+}
+
+static void test_arc_quarter(void **state)
+{
+	(void)state;
+	rig_t r;
+	rig_init(&r, MOTION_KIN_DIFF);
+	assert_true(motion_circular_rel(&r.m, 0, q(1000), q(90)));
+	run_until_idle(&r, 30000);
+	assert_true(fabs(d(r.m.ref.x_mm) - 1000) < 1e-5);
+	assert_true(fabs(d(r.m.ref.y_mm) - 1000) < 1e-5);
+	assert_int_equal(r.m.ref.th_deg, q(90));
+	assert_true(r.v_max <= 500.0 * 1.0000001);
+	assert_true(r.w_max <= 90.0 * 1.0000001);
+	assert_true(r.ax_max <= 500.0 * 1.0000001);
+	assert_false(motion_circular_rel(&r.m, q(10), q(1000), q(90)));
+}
+
+int main(void)
+{
+	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_forward_lands_exactly),
+		cmocka_unit_test(test_turn_full_circle),
+		cmocka_unit_test(test_linear_abs_square),
+		cmocka_unit_test(test_cruise_keeps_moving),
+		cmocka_unit_test(test_jog_watchdog),
+		cmocka_unit_test(test_continuous_retarget),
+		cmocka_unit_test(test_pause_resume_stop),
+		cmocka_unit_test(test_omni_linear),
+		cmocka_unit_test(test_arc_quarter),
+	};
+	return cmocka_run_group_tests_name("motion", tests, NULL, NULL);
+}
