@@ -441,6 +441,10 @@ static void seg_line(motion_t *m, const fx_pose_t *from, q32_t tx, q32_t ty, q32
 	}
 	g->p_end.x_mm = tx;
 	g->p_end.y_mm = ty;
+	/* Travel sign relative to the heading (moveForward may go backward). */
+	uint32_t hb = fx_deg_to_bam(from->th_deg);
+	int64_t dot = (int64_t)g->ux * fx_cos_bam(hb) + (int64_t)g->uy * fx_sin_bam(hb);
+	g->dir = dot < 0 ? -1 : 1;
 	g->dth = fx_wrap_deg(th_end - from->th_deg);
 	g->p_end.th_deg = fx_wrap_deg(from->th_deg + g->dth);
 	if (g->dth != 0)
@@ -785,6 +789,15 @@ static void path_tick(motion_t *m, fx_twist_t *out)
 			piece_pose(m, m->seg.s, m->seg.s + budget, &next);
 			m->seg.s += budget;
 			m->ref = next;
+			if (m->seg.kind == SEG_LINE && m->p.kin == MOTION_KIN_DIFF &&
+			    m->seg.s != budget) {
+				*out = (fx_twist_t){.vx_pt = m->seg.dir * budget};
+				return;
+			}
+			if (m->seg.kind == SEG_TURN && m->seg.s != budget) {
+				*out = (fx_twist_t){.w_pt = m->seg.dir * budget};
+				return;
+			}
 			if (m->seg.kind == SEG_ARC) {
 				/* Exact rates; the pose itself is analytic. */
 				q32_t w = m->seg.dir * budget;
@@ -795,8 +808,17 @@ static void path_tick(motion_t *m, fx_twist_t *out)
 			}
 			break;
 		}
-		/* Piece complete: land exactly on its end. */
-		m->ref = m->seg.p_end;
+		/* Piece complete: land exactly on its end. A corner's end is where
+		 * its integration arrives (within a micrometre of the planned exit),
+		 * so no position step appears; the next line aims from there. */
+		if (m->seg.kind == SEG_CORNER) {
+			fx_pose_t end;
+			piece_pose(m, m->seg.s, m->seg.len, &end);
+			end.th_deg = m->seg.p_end.th_deg;
+			m->ref = end;
+		} else {
+			m->ref = m->seg.p_end;
+		}
 		budget -= rem;
 		uint8_t kind = m->seg.kind;
 		m->seg.kind = SEG_NONE;

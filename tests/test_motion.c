@@ -150,8 +150,8 @@ static void test_cruise_keeps_moving(void **state)
 	assert_int_equal(stops, 0);
 	assert_true(fabs(d(r.m.ref.x_mm) - 3000) < 1e-6);
 	assert_true(fabs(d(r.m.ref.y_mm) - 2000) < 1e-6);
-	assert_true(r.ax_max <= 500.0 * 1.01);
-	assert_true(r.aw_max <= 180.0 * 1.01);
+	assert_true(r.ax_max <= 500.0 * 1.00001);
+	assert_true(r.aw_max <= 180.0 * 1.00001);
 	assert_true(r.w_max <= 90.0 * 1.001);
 }
 
