@@ -1,10 +1,14 @@
 /* Kinematics, wheel position loop and odometry (equations in kin.h). */
 #include "kin.h"
 
+#include "traj.h"
+
 void kin_init(kin_t *k, const kin_params_t *p)
 {
 	*k = (kin_t){0};
 	k->p = *p;
+	/* 2^16 / counts_per_mm in Q32 is mm per count in Q48. */
+	k->mm_per_count_q48 = p->counts_per_mm > 0 ? fx_div((q32_t)1 << 48, p->counts_per_mm) : 0;
 }
 
 void kin_body_to_wheels(const kin_params_t *p, const fx_twist_t *b, q32_t w[])
@@ -61,7 +65,7 @@ void kin_step(kin_t *k, const fx_twist_t *body, const int32_t meas[], int32_t ou
 		int32_t d = (int32_t)((uint32_t)meas[i] - (uint32_t)k->last_meas[i]);
 		k->last_meas[i] = meas[i];
 		k->meas_accum[i] += d;
-		meas_mm[i] = (q32_t)d * k->p.mm_per_count;
+		meas_mm[i] = ((q32_t)d * k->mm_per_count_q48) >> 16;
 
 		q32_t travel_counts = fx_mul(travel[i], k->p.counts_per_mm);
 		k->ref_counts_q32[i] += travel_counts;

@@ -41,6 +41,7 @@ typedef struct {
 	int64_t ref_counts_q32[KIN_MAX_WHEELS];
 	int32_t last_meas[KIN_MAX_WHEELS];
 	int64_t meas_accum[KIN_MAX_WHEELS]; /* unwrapped measured counts */
+	int64_t mm_per_count_q48; /* derived: odometry needs more than Q32 over kilometres */
 	bool synced;
 } kin_t;
 
