@@ -1,0 +1,95 @@
+/* The firmware on the simulated plant, in one process, in lockstep.
+ *
+ * Used by vehicle-sim and by tests: sim_exec runs one console line exactly as
+ * the serial console would (including the '$wait' and '$sim ...' extras
+ * below), sim_run_ms advances simulated time. Time advances only in
+ * sim_tick / sim_run_ms; each tick is vehicle_tick(now) then plant_step over
+ * the period. A sim_t holds pointers into itself: do not copy or move it
+ * after sim_init.
+ *
+ * Simulator extras (one reply line each, "ok ..." or "error 8 <message>"):
+ *   $wait MS                       run MS ms (0..3600000) of simulated time
+ *   $sim contact|obstacle|caution|estop on|off
+ *   $sim joystick X Y R            axes as fractions of full scale, -1..1
+ *   $sim joystick lost
+ *   $sim relay fail|ok|drop        fail: next close fails; drop: opens now
+ *   $sim drive AXIS fault CODE|ok|stuck|silent   AXIS 0-based; ok clears all
+ *   $sim battery MV                open-circuit voltage, mV
+ *   $sim input ID VALUE            set an input's value
+ *   $sim wire OUT IN|none          loop an output back to an input
+ *   $sim wall X0 Y0 X1 Y1          add a wall (axis-aligned rectangle, mm)
+ *   $sim pose                      true plant pose: "ok pose X Y THETA"
+ */
+#ifndef SIM_H
+#define SIM_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "../firmware/vehicle.h"
+#include "../proto/console.h"
+#include "plant.h"
+#include "sim_hal.h"
+#include "trace.h"
+
+#define SIM_WAIT_MAX_MS 3600000u
+
+typedef struct sim sim_t;
+typedef void (*sim_tick_fn)(void *ctx, sim_t *s);
+/* Replaces the lockstep run of '$wait' (vehicle-sim in real time). */
+typedef void (*sim_wait_fn)(void *ctx, uint32_t ms);
+
+struct sim {
+	vs_config_t cfg;
+	plant_t plant;
+	vs_hal_t hal;
+	vehicle_t vehicle;
+	console_t console;
+	uint64_t ticks;
+	uint64_t now_us; /* simulated time; the firmware sees it modulo 2^32 */
+	sim_tick_fn on_tick;
+	void *tick_ctx;
+	sim_wait_fn on_wait;
+	void *wait_ctx;
+	trace_t *trace;
+};
+
+/* Returns 0, or vehicle_init's negative value (invalid configuration; the
+ * field name goes to *bad_field when bad_field is not NULL). */
+int sim_init_ex(sim_t *s, const vs_config_t *cfg, const plant_params_t *pp, const char **bad_field);
+static inline int sim_init(sim_t *s, const vs_config_t *cfg, const plant_params_t *pp)
+{
+	return sim_init_ex(s, cfg, pp, NULL);
+}
+
+/* One console line (no line ending). Returns false when the line gets no
+ * reply (empty or comment); otherwise reply holds the line without "\n". */
+bool sim_exec(sim_t *s, const char *line, char *reply, size_t cap);
+void sim_tick(sim_t *s);
+void sim_run_ms(sim_t *s, uint32_t ms);
+
+void sim_set_tick_cb(sim_t *s, sim_tick_fn fn, void *ctx);
+void sim_set_wait_fn(sim_t *s, sim_wait_fn fn, void *ctx);
+/* Where console_feed replies go (vehicle-sim: stdout). */
+void sim_set_output(sim_t *s, console_write_fn fn, void *ctx);
+/* Trace every tick into t (NULL: none); the caller owns t. */
+void sim_set_trace(sim_t *s, trace_t *t);
+
+static inline plant_t *sim_plant(sim_t *s)
+{
+	return &s->plant;
+}
+static inline vehicle_t *sim_vehicle(sim_t *s)
+{
+	return &s->vehicle;
+}
+static inline double sim_time_s(const sim_t *s)
+{
+	return (double)s->now_us * 1e-6;
+}
+
+/* The '$' extra handler (console_extra_fn); ctx is the sim_t. */
+bool sim_extra(void *ctx, int argc, char **argv, char *reply, size_t cap);
+
+#endif

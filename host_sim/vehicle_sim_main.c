@@ -1,0 +1,300 @@
+/* vehicle-sim: the firmware on the simulated plant, with the bring-up console
+ * on stdin/stdout.
+ *
+ * --realtime ticks at the configured rate against CLOCK_MONOTONIC absolute
+ * deadlines and polls stdin between ticks; '$wait MS' holds further input
+ * for MS ms of wall time while the unit keeps running. --fast runs lockstep:
+ * simulated time advances only inside '$wait', so a script replays the same
+ * way every time. Input is fed to the console one line at a time so that a
+ * held line is never read early. Every reply is flushed at once.
+ */
+#include <errno.h>
+#include <getopt.h>
+#include <poll.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "../hal/config_xml.h"
+#include "sim.h"
+
+#define INBUF 4096
+
+static volatile sig_atomic_t stop_requested;
+
+static void on_signal(int sig)
+{
+	(void)sig;
+	stop_requested = 1;
+}
+
+typedef struct {
+	sim_t sim;
+	char in[INBUF];
+	size_t in_len;
+	bool eof;
+	bool write_failed;
+	/* realtime: input held until this monotonic time */
+	bool hold;
+	struct timespec hold_until;
+} app_t;
+
+static app_t app;
+
+static void write_stdout(void *ctx, const char *s, size_t n)
+{
+	app_t *a = ctx;
+	if (fwrite(s, 1, n, stdout) != n || fflush(stdout) != 0)
+		a->write_failed = true;
+}
+
+static void ts_add_ns(struct timespec *t, long long ns)
+{
+	long long v = (long long)t->tv_nsec + ns;
+	t->tv_sec += (time_t)(v / 1000000000LL);
+	t->tv_nsec = (long)(v % 1000000000LL);
+}
+
+static bool ts_before(const struct timespec *a, const struct timespec *b)
+{
+	return a->tv_sec < b->tv_sec || (a->tv_sec == b->tv_sec && a->tv_nsec < b->tv_nsec);
+}
+
+static void realtime_wait(void *ctx, uint32_t ms)
+{
+	app_t *a = ctx;
+	clock_gettime(CLOCK_MONOTONIC, &a->hold_until);
+	ts_add_ns(&a->hold_until, (long long)ms * 1000000LL);
+	a->hold = true;
+}
+
+/* Feeds complete lines from the input buffer, stopping when a '$wait' holds
+ * input. At EOF a last line without an ending is completed. A buffer full of
+ * one over-long line goes to the console whole; it discards it. */
+static void feed_lines(app_t *a)
+{
+	while (a->in_len > 0 && !a->hold && !stop_requested) {
+		size_t n = 0;
+		while (n < a->in_len && a->in[n] != '\n' && a->in[n] != '\r')
+			n++;
+		if (n < a->in_len) {
+			n++; /* include the line ending */
+		} else if (a->in_len < sizeof(a->in) && !a->eof) {
+			return; /* wait for the rest of the line */
+		}
+		bool ended = a->in[n - 1] == '\n' || a->in[n - 1] == '\r';
+		console_feed(&a->sim.console, (const uint8_t *)a->in, n);
+		memmove(a->in, a->in + n, a->in_len - n);
+		a->in_len -= n;
+		if (a->eof && a->in_len == 0 && !ended)
+			console_feed(&a->sim.console, (const uint8_t *)"\n", 1);
+	}
+}
+
+/* Reads what stdin has (blocking or not). Returns false on a fatal error. */
+static bool read_input(app_t *a)
+{
+	if (a->eof || a->in_len == sizeof(a->in))
+		return true;
+	ssize_t r = read(STDIN_FILENO, a->in + a->in_len, sizeof(a->in) - a->in_len);
+	if (r > 0)
+		a->in_len += (size_t)r;
+	else if (r == 0)
+		a->eof = true;
+	else if (errno != EINTR && errno != EAGAIN)
+		return false;
+	return true;
+}
+
+static int run_fast(app_t *a)
+{
+	while (!stop_requested && !a->write_failed) {
+		if (!read_input(a))
+			return 1;
+		feed_lines(a);
+		if (a->eof && a->in_len == 0)
+			break;
+	}
+	return 0;
+}
+
+static int run_realtime(app_t *a)
+{
+	long long period_ns = 1000000000LL / (long long)a->sim.cfg.tick_hz;
+	struct timespec next, now;
+	clock_gettime(CLOCK_MONOTONIC, &next);
+
+	while (!stop_requested && !a->write_failed) {
+		clock_gettime(CLOCK_MONOTONIC, &now);
+		if (a->hold && !ts_before(&now, &a->hold_until))
+			a->hold = false;
+		if (!a->hold) {
+			struct pollfd pfd = {.fd = STDIN_FILENO, .events = POLLIN};
+			if (!a->eof && poll(&pfd, 1, 0) > 0 && !read_input(a))
+				return 1;
+			feed_lines(a);
+			if (a->eof && a->in_len == 0 && !a->hold)
+				break;
+		}
+		sim_tick(&a->sim);
+
+		ts_add_ns(&next, period_ns);
+		clock_gettime(CLOCK_MONOTONIC, &now);
+		/* Far behind (stopped in a debugger, host overloaded): skip ahead
+		 * rather than burst through the missed ticks. Simulated time
+		 * stays regular either way. */
+		struct timespec late = next;
+		ts_add_ns(&late, 100000000LL);
+		if (ts_before(&late, &now))
+			next = now;
+		while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, NULL) == EINTR)
+			if (stop_requested)
+				break;
+	}
+	return 0;
+}
+
+static void usage(FILE *f)
+{
+	fputs("usage: vehicle-sim [options]\n"
+	      "  --config FILE   vehicle description (default config/vehicle.xml)\n"
+	      "  --io FILE       io.xml (default config/io.xml)\n"
+	      "  --realtime      tick at the configured rate in wall time\n"
+	      "  --fast          lockstep: time advances only in '$wait MS'; exit at EOF\n"
+	      "                  (default: --realtime on a terminal, else --fast)\n"
+	      "  --trace FILE    CSV trace, one row per tick (columns: host_sim/trace.h)\n"
+	      "  --trace-every N one trace row every N ticks\n"
+	      "  --ideal         ideal plant: no motor lag, no acceleration/current limit,\n"
+	      "                  2^20-count encoders (overrides the configured resolution)\n"
+	      "  --help          this text\n"
+	      "Console on stdin/stdout (spec section 7); simulator extras: $wait MS, $sim ...\n"
+	      "(see host_sim/sim.h).\n",
+	      f);
+}
+
+int main(int argc, char **argv)
+{
+	const char *config_path = "config/vehicle.xml", *io_path = "config/io.xml";
+	const char *trace_path = NULL;
+	unsigned long trace_every = 1;
+	int realtime = -1;
+	bool ideal = false;
+
+	enum { O_CONFIG = 1, O_IO, O_RT, O_FAST, O_TRACE, O_EVERY, O_IDEAL, O_HELP };
+	static const struct option opts[] = {
+	    {"config", required_argument, NULL, O_CONFIG},
+	    {"io", required_argument, NULL, O_IO},
+	    {"realtime", no_argument, NULL, O_RT},
+	    {"fast", no_argument, NULL, O_FAST},
+	    {"trace", required_argument, NULL, O_TRACE},
+	    {"trace-every", required_argument, NULL, O_EVERY},
+	    {"ideal", no_argument, NULL, O_IDEAL},
+	    {"help", no_argument, NULL, O_HELP},
+	    {NULL, 0, NULL, 0},
+	};
+	int o;
+	while ((o = getopt_long(argc, argv, "", opts, NULL)) != -1) {
+		switch (o) {
+		case O_CONFIG:
+			config_path = optarg;
+			break;
+		case O_IO:
+			io_path = optarg;
+			break;
+		case O_RT:
+			realtime = 1;
+			break;
+		case O_FAST:
+			realtime = 0;
+			break;
+		case O_TRACE:
+			trace_path = optarg;
+			break;
+		case O_EVERY: {
+			char *end;
+			trace_every = strtoul(optarg, &end, 10);
+			if (*optarg == '\0' || *end != '\0' || trace_every < 1 ||
+			    trace_every > 1000000) {
+				fprintf(stderr, "vehicle-sim: --trace-every: 1..1000000\n");
+				return 2;
+			}
+			break;
+		}
+		case O_IDEAL:
+			ideal = true;
+			break;
+		case O_HELP:
+			usage(stdout);
+			return 0;
+		default:
+			usage(stderr);
+			return 2;
+		}
+	}
+	if (optind < argc) {
+		fprintf(stderr, "vehicle-sim: unexpected argument '%s'\n", argv[optind]);
+		usage(stderr);
+		return 2;
+	}
+	if (realtime < 0)
+		realtime = isatty(STDIN_FILENO) ? 1 : 0;
+
+	vs_config_t cfg;
+	char err[512];
+	if (config_load(config_path, io_path, &cfg, NULL, err, sizeof(err)) < 0) {
+		fprintf(stderr, "vehicle-sim: %s\n", err);
+		return 1;
+	}
+	plant_params_t pp;
+	if (ideal) {
+		plant_params_ideal(&pp);
+		/* The firmware converts counts with the configured resolution, so
+		 * the fine encoder goes into the configuration too. */
+		cfg.encoder_counts_per_rev = PLANT_HIRES_COUNTS_PER_REV;
+	} else {
+		plant_params_default(&pp);
+	}
+
+	app_t *a = &app;
+	const char *bad = NULL;
+	if (sim_init_ex(&a->sim, &cfg, &pp, &bad) < 0) {
+		fprintf(stderr, "vehicle-sim: configuration rejected: %s\n", bad ? bad : "?");
+		return 1;
+	}
+	sim_set_output(&a->sim, write_stdout, a);
+	if (realtime)
+		sim_set_wait_fn(&a->sim, realtime_wait, a);
+
+	trace_t trace;
+	if (trace_path) {
+		if (trace_open(&trace, trace_path, (uint32_t)trace_every) < 0) {
+			fprintf(stderr, "vehicle-sim: %s: %s\n", trace_path, strerror(errno));
+			return 1;
+		}
+		sim_set_trace(&a->sim, &trace);
+	}
+
+	struct sigaction sa;
+	memset(&sa, 0, sizeof(sa));
+	sa.sa_handler = on_signal; /* no SA_RESTART: a blocking read returns */
+	sigemptyset(&sa.sa_mask);
+	sigaction(SIGINT, &sa, NULL);
+	sigaction(SIGTERM, &sa, NULL);
+	signal(SIGPIPE, SIG_IGN);
+
+	fprintf(stderr, "vehicle-sim: %s base, %u axes, %u Hz, %s%s mode (%s, %s)\n",
+		cfg.kinematics == VS_KIN_OMNI ? "mecanum" : "differential", vs_config_axes(&cfg),
+		cfg.tick_hz, ideal ? "ideal plant, " : "", realtime ? "realtime" : "fast",
+		config_path, io_path);
+
+	int rc = realtime ? run_realtime(a) : run_fast(a);
+
+	if (trace_path && trace_close(&trace) < 0) {
+		fprintf(stderr, "vehicle-sim: %s: write failed\n", trace_path);
+		rc = 1;
+	}
+	return rc;
+}

@@ -1,0 +1,253 @@
+/* The whole unit in-process: firmware + console + simulated plant, driven
+ * through sim_exec exactly as a host drives the console. */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "host_sim/sim.h"
+
+static sim_t sim;
+
+static void expect(const char *line, const char *want)
+{
+	char reply[CONSOLE_REPLY_MAX];
+	assert_true(sim_exec(&sim, line, reply, sizeof(reply)));
+	if (strcmp(reply, want) != 0)
+		fail_msg("'%s' -> '%s', expected '%s'", line, reply, want);
+}
+
+static void start(bool ideal)
+{
+	vs_config_t cfg;
+	plant_params_t pp;
+	vs_config_defaults(&cfg);
+	if (ideal) {
+		plant_params_ideal(&pp);
+		cfg.encoder_counts_per_rev = PLANT_HIRES_COUNTS_PER_REV;
+	} else {
+		plant_params_default(&pp);
+	}
+	assert_int_equal(sim_init(&sim, &cfg, &pp), 0);
+}
+
+static void move_forward_end_to_end(void **state)
+{
+	(void)state;
+	start(true);
+	expect("getState", "ok true 25 \"Unpowered\"");
+	expect("setPower true", "ok true");
+	expect("setServo true", "ok true");
+	expect("getState", "ok true 16 \"Ready\"");
+	expect("moveForward 1000", "ok true");
+	expect("$wait 100", "ok wait 100");
+	expect("getState", "ok true 17 \"Busy\"");
+	/* 1000 mm at 500 mm/s and 500 mm/s^2: 3 s; margin for settling. */
+	expect("$wait 3900", "ok wait 3900");
+	expect("getPosition", "ok true 1000.000 0.000 0.000");
+	expect("$sim pose", "ok pose 1000.000 0.000 0.000");
+	expect("getState", "ok true 16 \"Ready\"");
+	assert_int_equal(sim.now_us, 4000000);
+	assert_int_equal(sim.ticks, 4000);
+}
+
+/* With motor lag, limits and 16384-count encoders the odometry is good to
+ * an encoder count and the truth to a fraction of a millimetre. */
+static void move_forward_realistic_plant(void **state)
+{
+	(void)state;
+	start(false);
+	expect("setPower true", "ok true");
+	expect("setServo true", "ok true");
+	expect("moveForward 1000", "ok true");
+	sim_run_ms(&sim, 4000);
+	vs_position_t pos;
+	assert_true(vs_getPosition(sim_vehicle(&sim), &pos));
+	double count_mm = M_PI * 150.0 / 16384.0;
+	assert_true(fabs(pos.x - 1000.0) <= count_mm);
+	double x, y, th;
+	plant_pose(sim_plant(&sim), &x, &y, &th);
+	assert_true(fabs(x - 1000.0) < 0.1);
+	assert_true(fabs(y) < 0.1);
+	assert_true(fabs(th) < 0.01);
+}
+
+static void sim_extras_replies(void **state)
+{
+	(void)state;
+	start(false);
+	plant_t *pl = sim_plant(&sim);
+	expect("$sim contact on", "ok contact on");
+	assert_true(pl->contact_inject);
+	expect("$sim contact off", "ok contact off");
+	assert_false(pl->contact_inject);
+	expect("$sim obstacle on", "ok obstacle on");
+	assert_true(pl->obstacle);
+	expect("$sim caution on", "ok caution on");
+	assert_true(pl->caution);
+	expect("$sim estop off", "ok estop off");
+	expect("$sim contact maybe", "error 8 usage: $sim contact on|off");
+	expect("$sim joystick 0.5 -1 0", "ok joystick 16384 -32767 0");
+	expect("$sim joystick 1.5 0 0", "error 8 joystick axis must be -1..1, got '1.5'");
+	expect("$sim joystick lost", "ok joystick lost");
+	assert_false(pl->js.present);
+	expect("$sim relay drop", "ok relay drop");
+	expect("$sim relay sideways", "error 8 usage: $sim relay fail|ok|drop");
+	expect("$sim drive 1 fault 0x2310", "ok drive 1 fault 0x2310");
+	assert_int_equal(pl->w[1].fault_latched, 0x2310);
+	expect("$sim drive 1 fault 0", "error 8 fault code must be 1..65535, got '0'");
+	expect("$sim drive 0 stuck", "ok drive 0 stuck");
+	expect("$sim drive 0 silent", "ok drive 0 silent");
+	expect("$sim drive 0 ok", "ok drive 0 ok");
+	assert_false(pl->w[0].stuck);
+	assert_false(pl->w[0].silent);
+	expect("$sim drive 2 ok", "error 8 no axis 2 (0..1)");
+	expect("$sim drive x ok", "error 8 usage: $sim drive AXIS fault CODE|ok|stuck|silent");
+	expect("$sim battery 21500", "ok battery 21500");
+	assert_true(pl->battery_ocv_v == 21.5);
+	expect("$sim battery -1", "error 8 usage: $sim battery MV (0..1000000)");
+	expect("$sim input 1 300", "ok input 1 44"); /* 8-bit input: 300 & 0xff */
+	expect("$sim input 3 1", "error 8 no input with id 3");
+	expect("$sim wire 3 2", "ok wire 3 2");
+	expect("$sim wire 3 none", "ok wire 3 none");
+	expect("$sim wire 1 2", "error 8 cannot wire 1 to 2");
+	expect("$sim wall 1000 -500 1100 500", "ok wall 1");
+	expect("$sim wall 1000 -500 1100 nan", "error 8 not a number 'nan'");
+	expect("$sim pose", "ok pose 0.000 0.000 0.000");
+	expect("$sim pose 1", "error 8 usage: $sim pose");
+	expect("$sim teleport", "error 8 unknown command '$sim teleport'");
+	expect("$wait -5", "error 8 usage: $wait MS (0..3600000)");
+	expect("$wait 3600001", "error 8 usage: $wait MS (0..3600000)");
+	expect("$wait", "error 8 usage: $wait MS (0..3600000)");
+	assert_int_equal(sim.now_us, 0); /* none of that ran time */
+	expect("$wait 0", "ok wait 0");
+	assert_int_equal(sim.now_us, 0);
+}
+
+static void relay_failure_through_console(void **state)
+{
+	(void)state;
+	start(false);
+	expect("$sim relay fail", "ok relay fail");
+	expect("setPower true", "ok false");
+	expect("getState", "ok true 19 \"Alarm-205\"");
+	expect("$sim relay ok", "ok relay ok");
+	expect("clearAlarm", "ok true");
+	expect("setPower true", "ok true");
+	expect("getState", "ok true 24 \"Powered\"");
+}
+
+static void io_loopback_through_console(void **state)
+{
+	(void)state;
+	start(false);
+	/* Default io table: output 3 (8 bits) loops back to input 1. */
+	expect("setOutput 3 255 15", "ok true");
+	expect("getInput 1", "ok true 15");
+	expect("setOutput 3 0 5", "ok true");
+	expect("getInput 1", "ok true 10");
+	expect("$sim input 2 1", "ok input 2 1");
+	expect("getInput 2", "ok true 1");
+}
+
+static void contact_with_wall_locks(void **state)
+{
+	(void)state;
+	start(true);
+	expect("$sim wall 700 -1000 800 1000", "ok wall 1");
+	expect("setDigitalSensorLock true", "ok true");
+	expect("setPower true", "ok true");
+	expect("setServo true", "ok true");
+	expect("moveForward 1000", "ok true");
+	expect("$wait 4000", "ok wait 4000");
+	expect("getState", "ok true 23 \"Locked\"");
+	double x, y, th;
+	plant_pose(sim_plant(&sim), &x, &y, &th);
+	/* Touched at x = 400 (wall at 700, body radius 300), then braked. */
+	assert_true(x >= 400.0 && x < 700.0);
+}
+
+typedef struct {
+	unsigned calls;
+	double last_time_s;
+} tick_rec_t;
+
+static void on_tick(void *ctx, sim_t *s)
+{
+	tick_rec_t *r = ctx;
+	r->calls++;
+	r->last_time_s = sim_time_s(s);
+}
+
+static void tick_callback_and_trace(void **state)
+{
+	(void)state;
+	start(false);
+	tick_rec_t rec = {0};
+	sim_set_tick_cb(&sim, on_tick, &rec);
+	char *buf = NULL;
+	size_t len = 0;
+	FILE *f = open_memstream(&buf, &len);
+	assert_non_null(f);
+	trace_t tr;
+	trace_attach(&tr, f, 5);
+	sim_set_trace(&sim, &tr);
+	expect("$wait 20", "ok wait 20");
+	assert_int_equal(rec.calls, 20);
+	assert_true(rec.last_time_s == 0.020);
+	assert_int_equal(trace_close(&tr), 0);
+	fclose(f);
+
+	/* Header + rows at ticks 1, 6, 11, 16. */
+	int lines = 0;
+	for (size_t i = 0; i < len; i++)
+		lines += buf[i] == '\n';
+	assert_int_equal(lines, 5);
+	assert_memory_equal(buf,
+			    "time_s,cmd_x_mm,cmd_y_mm,cmd_th_deg,odo_x_mm,odo_y_mm,odo_th_deg,"
+			    "true_x_mm,true_y_mm,true_th_deg,cmd_vx_mm_s,cmd_vy_mm_s,cmd_w_deg_s,"
+			    "sp0_cps,sp1_cps,sp2_cps,sp3_cps,meas0_cps,meas1_cps,meas2_cps,"
+			    "meas3_cps,state,queue_len\n",
+			    strlen("time_s,cmd_x_mm,cmd_y_mm,cmd_th_deg,odo_x_mm,odo_y_mm,"
+				   "odo_th_deg,true_x_mm,true_y_mm,true_th_deg,cmd_vx_mm_s,"
+				   "cmd_vy_mm_s,cmd_w_deg_s,sp0_cps,sp1_cps,sp2_cps,sp3_cps,"
+				   "meas0_cps,meas1_cps,meas2_cps,meas3_cps,state,queue_len\n"));
+	const char *row1 = strchr(buf, '\n') + 1;
+	const char *want =
+	    "0.001000,0.0000,0.0000,0.0000,0.0000,0.0000,0.0000,0.0000,0.0000,"
+	    "0.0000,0.000,0.000,0.000,0.00,0.00,0.00,0.00,0.00,0.00,0.00,0.00,25,0\n";
+	assert_memory_equal(row1, want, strlen(want));
+	free(buf);
+}
+
+static void bad_config_rejected(void **state)
+{
+	(void)state;
+	vs_config_t cfg;
+	vs_config_defaults(&cfg);
+	cfg.tick_hz = 5;
+	const char *bad = NULL;
+	assert_true(sim_init_ex(&sim, &cfg, NULL, &bad) < 0);
+	assert_string_equal(bad, "tick_hz");
+}
+
+int main(void)
+{
+	const struct CMUnitTest tests[] = {
+	    cmocka_unit_test(move_forward_end_to_end),
+	    cmocka_unit_test(move_forward_realistic_plant),
+	    cmocka_unit_test(sim_extras_replies),
+	    cmocka_unit_test(relay_failure_through_console),
+	    cmocka_unit_test(io_loopback_through_console),
+	    cmocka_unit_test(contact_with_wall_locks),
+	    cmocka_unit_test(tick_callback_and_trace),
+	    cmocka_unit_test(bad_config_rejected),
+	};
+	return cmocka_run_group_tests(tests, NULL, NULL);
+}
