@@ -105,6 +105,21 @@ typedef struct {
 } vs_diag_t;
 void vehicle_diag(const vehicle_t *v, vs_diag_t *d);
 
+/* Firmware-internal: the fixed-point core that vs_api.c (the double
+ * boundary) calls after converting and range-checking the arguments. */
+typedef enum {
+	VEHICLE_GATE_READY = 0, /* Ready-only operation */
+	VEHICLE_GATE_SERVO = 1, /* Servo-on operation, queued while paused */
+	VEHICLE_GATE_JOG = 2,   /* Servo-on velocity command: refused while paused */
+} vehicle_gate_t;
+/* Raises the warning "<op> refused: <reason of code>"; returns false. */
+bool vehicle_refuse(vehicle_t *v, const char *op, uint32_t code);
+/* State checks of a move* operation; false (with the warning) when refused. */
+bool vehicle_move_gate(vehicle_t *v, const char *op, vehicle_gate_t gate);
+/* A motion_* call returned false: raise the most specific warning, return
+ * false. velocity_mode: jog or continuous (refused while path motion runs). */
+bool vehicle_motion_refused(vehicle_t *v, const char *op, bool velocity_mode);
+
 /* Implementation detail: static allocation by the caller, fields private. */
 struct vehicle {
 	vs_config_t cfg;
@@ -113,6 +128,7 @@ struct vehicle {
 	kin_t kin;
 	alarm_list_t alarms;
 	fx_pose_t odom;
+	uint8_t naxes;
 	/* Settings in force (interface units, as accepted). */
 	vs_velocity_t vel_set, acc_set;
 	int16_t jog_timeout_ms;
@@ -123,8 +139,22 @@ struct vehicle {
 	bool have_now;
 	int32_t wheel_cps_q8[VS_MAX_AXES];
 	fx_twist_t cmd;
+	/* Latest drive samples; .enabled also follows drive_enable commands. */
+	hal_drive_state_t drive[VS_MAX_AXES];
+	int32_t meas_counts[VS_MAX_AXES];
+	/* Supervision limits, fixed point, derived from cfg at init. */
+	uint32_t period_us;
+	uint32_t drive_timeout_ticks, encoder_stuck_ticks;
+	int32_t encoder_stuck_cps_q8;  /* commanded speed that must move the encoder */
+	int64_t following_err_max_counts;
+	uint32_t battery_low_mv, battery_critical_mv;
+	q32_t caution_vel_t;           /* mm/s, Q32 */
+	int32_t joystick_deadband_q15;
 	/* Supervision. */
+	bool contact_prev, obstacle_prev, caution_prev, battery_low_armed;
 	uint32_t drive_silent_ticks[VS_MAX_AXES];
+	uint16_t drive_fault_reported[VS_MAX_AXES]; /* fault code already raised */
+	bool drive_timeout_reported[VS_MAX_AXES];
 	uint32_t encoder_still_ticks[VS_MAX_AXES];
 	uint32_t battery_mv;
 	char state_msg[VS_STATE_MSG_MAX];

@@ -1,0 +1,366 @@
+/* The double-facing VehicleService operations and vehicle_init.
+ *
+ * This is the one firmware file that computes with floating point: each
+ * argument is checked once (NaN, infinity, range) and converted to Q32; the
+ * tick never sees a double. libc is not available, so NaN is "x != x" and
+ * infinity fails the range bounds.
+ *
+ * Check order of a move*: the arguments first (110 invalid, 111 over a
+ * limit, 112 not possible on this base), so the same command always gets
+ * the same answer for its form; then the unit state (vehicle_move_gate);
+ * then what the motion engine says (queue full, ...).
+ */
+#include <stddef.h>
+#include <stdint.h>
+
+#include "vehicle.h"
+
+#define POS_MAX_MM 1e6
+#define ANGLE_MAX_DEG 36000.0
+#define TWO_POW_32 4294967296.0
+#define PI_D 3.14159265358979323846
+
+/* Finite and |x| <= lim. */
+static bool within(double x, double lim)
+{
+	return x == x && x >= -lim && x <= lim;
+}
+
+/* Rounded to nearest; callers have bounded |x| well inside the range. */
+static q32_t to_q32(double x)
+{
+	double r = x * TWO_POW_32;
+	return (q32_t)(r >= 0.0 ? r + 0.5 : r - 0.5);
+}
+
+static double from_q32(q32_t x)
+{
+	return (double)x / TWO_POW_32;
+}
+
+static bool pose_ok(const vs_position_t *p)
+{
+	return within(p->x, POS_MAX_MM) && within(p->y, POS_MAX_MM) &&
+	       within(p->theta, ANGLE_MAX_DEG);
+}
+
+static fx_pose_t pose_q32(const vs_position_t *p)
+{
+	fx_pose_t q = {to_q32(p->x), to_q32(p->y), to_q32(p->theta)};
+	return q;
+}
+
+/* ---- init ------------------------------------------------------------- */
+
+static bool hal_complete(const vs_hal_t *hal, const vs_config_t *c)
+{
+	const vs_hal_ops_t *o = hal ? hal->ops : NULL;
+	if (!o || !o->drive_set_velocity || !o->drive_enable || !o->drive_read ||
+	    !o->drive_reset_fault || !o->power_set || !o->power_feedback || !o->io_read ||
+	    !o->io_write || !o->battery_mv)
+		return false;
+	if (c->has_contact_sensor && !o->contact)
+		return false;
+	if (c->has_obstacle_input && (!o->obstacle || !o->obstacle_caution))
+		return false;
+	if (c->has_estop && !o->estop)
+		return false;
+	if (c->has_joystick && !o->joystick)
+		return false;
+	return true;
+}
+
+static uint32_t ms_to_ticks(uint32_t ms, uint32_t tick_hz)
+{
+	uint32_t t = (uint32_t)(((uint64_t)ms * tick_hz + 999u) / 1000u);
+	return t ? t : 1u;
+}
+
+int vehicle_init(vehicle_t *v, const vs_config_t *cfg, const vs_hal_t *hal, const char **bad_field)
+{
+	int rc = vs_config_check(cfg, bad_field);
+	if (rc != 0)
+		return rc;
+	if (!hal_complete(hal, cfg)) {
+		if (bad_field)
+			*bad_field = "hal";
+		return -4;
+	}
+
+	*v = (vehicle_t){0};
+	v->cfg = *cfg;
+	v->hal = *hal;
+	v->naxes = vs_config_axes(cfg);
+
+	motion_params_t mp = {
+		.tick_hz = cfg->tick_hz,
+		.kin = cfg->kinematics == VS_KIN_OMNI ? MOTION_KIN_OMNI : MOTION_KIN_DIFF,
+		.vel_limit_t = to_q32(cfg->vel_limit_t_mm_s),
+		.vel_limit_r = to_q32(cfg->vel_limit_r_deg_s),
+		.acc_limit_t = to_q32(cfg->acc_limit_t_mm_s2),
+		.acc_limit_r = to_q32(cfg->acc_limit_r_deg_s2),
+		.cruise_blend_mm = to_q32(cfg->cruise_blend_mm),
+	};
+	motion_init(&v->motion, &mp);
+	motion_set_velocity(&v->motion, to_q32(cfg->vel_default_t_mm_s),
+			    to_q32(cfg->vel_default_r_deg_s));
+	motion_set_accel(&v->motion, to_q32(cfg->acc_default_t_mm_s2),
+			 to_q32(cfg->acc_default_r_deg_s2));
+	motion_set_jog_timeout_ms(&v->motion, cfg->jog_timeout_default_ms);
+
+	double circumference = PI_D * cfg->wheel_diameter_mm;
+	double counts_per_mm = (double)cfg->encoder_counts_per_rev / circumference;
+	double half = cfg->kinematics == VS_KIN_OMNI
+			      ? (cfg->wheel_base_mm + cfg->track_width_mm) / 2.0
+			      : cfg->track_width_mm / 2.0;
+	double mm_per_deg = half * PI_D / 180.0;
+	kin_params_t kp = {
+		.kin = (uint8_t)mp.kin,
+		.n = v->naxes,
+		.tick_hz = cfg->tick_hz,
+		.counts_per_mm = to_q32(counts_per_mm),
+		.mm_per_count = to_q32(1.0 / counts_per_mm),
+		.mm_per_deg = to_q32(mm_per_deg),
+		.deg_per_mm = to_q32(1.0 / mm_per_deg),
+		.kp_q16 = (int64_t)(cfg->wheel_kp_per_s * 65536.0 + 0.5),
+	};
+	kin_init(&v->kin, &kp);
+
+	v->vel_set = (vs_velocity_t){cfg->vel_default_t_mm_s, cfg->vel_default_r_deg_s};
+	v->acc_set = (vs_velocity_t){cfg->acc_default_t_mm_s2, cfg->acc_default_r_deg_s2};
+	v->jog_timeout_ms = (int16_t)cfg->jog_timeout_default_ms;
+
+	v->period_us = 1000000u / cfg->tick_hz;
+	v->drive_timeout_ticks = ms_to_ticks(cfg->drive_timeout_ms, cfg->tick_hz);
+	v->encoder_stuck_ticks = ms_to_ticks(cfg->encoder_stuck_ms, cfg->tick_hz);
+	/* A speed that must move the encoder by 20 counts within the window:
+	 * well clear of quantisation, so a slow creep never trips it. */
+	v->encoder_stuck_cps_q8 = (int32_t)(20u * 256u * 1000u / cfg->encoder_stuck_ms);
+	v->following_err_max_counts = (int64_t)(cfg->following_error_mm * counts_per_mm + 0.5);
+	v->battery_low_mv = (uint32_t)(cfg->battery_low_v * 1000.0 + 0.5);
+	v->battery_critical_mv = (uint32_t)(cfg->battery_critical_v * 1000.0 + 0.5);
+	v->battery_low_armed = true;
+	v->caution_vel_t = to_q32(cfg->caution_vel_t_mm_s);
+	v->joystick_deadband_q15 = (int32_t)(cfg->joystick_deadband * 32767.0 + 0.5);
+
+	/* Start Unpowered in fact, not only in name. */
+	for (uint8_t i = 0; i < v->naxes; i++)
+		hal->ops->drive_enable(hal->ctx, i, false);
+	hal->ops->power_set(hal->ctx, false);
+	v->battery_mv = hal->ops->battery_mv(hal->ctx);
+	return 0;
+}
+
+/* ---- queries ---------------------------------------------------------- */
+
+bool vs_getAccelerationLimit(vehicle_t *v, double *accLimitT, double *accLimitR)
+{
+	*accLimitT = v->cfg.acc_limit_t_mm_s2;
+	*accLimitR = v->cfg.acc_limit_r_deg_s2;
+	return true;
+}
+
+bool vs_getVelocityLimit(vehicle_t *v, double *velLimitT, double *velLimitR)
+{
+	*velLimitT = v->cfg.vel_limit_t_mm_s;
+	*velLimitR = v->cfg.vel_limit_r_deg_s;
+	return true;
+}
+
+bool vs_getDefaultAcceleration(vehicle_t *v, vs_velocity_t *defaultAccel)
+{
+	defaultAccel->translation = v->cfg.acc_default_t_mm_s2;
+	defaultAccel->rotation = v->cfg.acc_default_r_deg_s2;
+	return true;
+}
+
+bool vs_getDefaultVelocity(vehicle_t *v, vs_velocity_t *defaultVel)
+{
+	defaultVel->translation = v->cfg.vel_default_t_mm_s;
+	defaultVel->rotation = v->cfg.vel_default_r_deg_s;
+	return true;
+}
+
+bool vs_getBatteryVoltage(vehicle_t *v, double *voltage)
+{
+	/* 0.1 V units: 24300 mV reads 243.0. */
+	*voltage = (double)v->battery_mv / 100.0;
+	return true;
+}
+
+bool vs_getPosition(vehicle_t *v, vs_position_t *pos)
+{
+	q32_t th = fx_wrap_deg(v->odom.th_deg);
+	/* The interface range is (-180, 180]. */
+	if (th == -FX_DEG_180)
+		th = FX_DEG_180;
+	pos->x = from_q32(v->odom.x_mm);
+	pos->y = from_q32(v->odom.y_mm);
+	pos->theta = from_q32(th);
+	return true;
+}
+
+/* ---- settings --------------------------------------------------------- */
+
+/* 0 < x <= limit, finite; 110 when not a number, 111 otherwise. */
+static uint32_t check_setting(double x, double limit)
+{
+	if (!within(x, 1e300))
+		return ALM_W_BAD_ARGUMENT;
+	if (!(x > 0.0 && x <= limit))
+		return ALM_W_OVER_LIMIT;
+	return 0;
+}
+
+bool vs_setVelocity(vehicle_t *v, vs_velocity_t vel)
+{
+	uint32_t e = check_setting(vel.translation, v->cfg.vel_limit_t_mm_s);
+	uint32_t er = check_setting(vel.rotation, v->cfg.vel_limit_r_deg_s);
+	if (e == 0 || er == ALM_W_BAD_ARGUMENT)
+		e = er;
+	if (e != 0)
+		return vehicle_refuse(v, "setVelocity", e);
+	motion_set_velocity(&v->motion, to_q32(vel.translation), to_q32(vel.rotation));
+	v->vel_set = vel;
+	return true;
+}
+
+bool vs_setAcceleration(vehicle_t *v, vs_velocity_t accel)
+{
+	uint32_t e = check_setting(accel.translation, v->cfg.acc_limit_t_mm_s2);
+	uint32_t er = check_setting(accel.rotation, v->cfg.acc_limit_r_deg_s2);
+	if (e == 0 || er == ALM_W_BAD_ARGUMENT)
+		e = er;
+	if (e != 0)
+		return vehicle_refuse(v, "setAcceleration", e);
+	/* Moving = Busy (or Avoid); a unit paused at rest may take it. */
+	if (motion_is_moving(&v->motion) ||
+	    (motion_has_work(&v->motion) && !motion_is_paused(&v->motion)))
+		return vehicle_refuse(v, "setAcceleration", ALM_W_MOVING);
+	motion_set_accel(&v->motion, to_q32(accel.translation), to_q32(accel.rotation));
+	v->acc_set = accel;
+	return true;
+}
+
+bool vs_setPosition(vehicle_t *v, vs_position_t pos)
+{
+	if (!pose_ok(&pos))
+		return vehicle_refuse(v, "setPosition", ALM_W_BAD_ARGUMENT);
+	fx_pose_t p = pose_q32(&pos);
+	p.th_deg = fx_wrap_deg(p.th_deg);
+	v->odom = p;
+	motion_set_pose(&v->motion, &p);
+	return true;
+}
+
+/* ---- motion ----------------------------------------------------------- */
+
+bool vs_moveForward(vehicle_t *v, double x_)
+{
+	static const char op[] = "moveForward";
+	if (!within(x_, POS_MAX_MM))
+		return vehicle_refuse(v, op, ALM_W_BAD_ARGUMENT);
+	if (!vehicle_move_gate(v, op, VEHICLE_GATE_READY))
+		return false;
+	if (!motion_forward(&v->motion, to_q32(x_)))
+		return vehicle_motion_refused(v, op, false);
+	return true;
+}
+
+bool vs_moveTurn(vehicle_t *v, double theta_)
+{
+	static const char op[] = "moveTurn";
+	if (!within(theta_, ANGLE_MAX_DEG))
+		return vehicle_refuse(v, op, ALM_W_BAD_ARGUMENT);
+	if (!vehicle_move_gate(v, op, VEHICLE_GATE_READY))
+		return false;
+	if (!motion_turn(&v->motion, to_q32(theta_)))
+		return vehicle_motion_refused(v, op, false);
+	return true;
+}
+
+bool vs_moveLinearRel(vehicle_t *v, vs_position_t pos)
+{
+	static const char op[] = "moveLinearRel";
+	if (!pose_ok(&pos))
+		return vehicle_refuse(v, op, ALM_W_BAD_ARGUMENT);
+	if (!vehicle_move_gate(v, op, VEHICLE_GATE_READY))
+		return false;
+	fx_pose_t rel = pose_q32(&pos);
+	if (!motion_linear_rel(&v->motion, &rel))
+		return vehicle_motion_refused(v, op, false);
+	return true;
+}
+
+bool vs_moveCircularRel(vehicle_t *v, vs_point_t centerPoint, double theta)
+{
+	static const char op[] = "moveCircularRel";
+	if (!within(centerPoint.x, POS_MAX_MM) || !within(centerPoint.y, POS_MAX_MM) ||
+	    !within(theta, ANGLE_MAX_DEG))
+		return vehicle_refuse(v, op, ALM_W_BAD_ARGUMENT);
+	/* A differential base can only turn about a point on its axle line. */
+	if (v->cfg.kinematics == VS_KIN_DIFF && centerPoint.x != 0.0)
+		return vehicle_refuse(v, op, ALM_W_KINEMATICS);
+	if (!vehicle_move_gate(v, op, VEHICLE_GATE_READY))
+		return false;
+	if (!motion_circular_rel(&v->motion, to_q32(centerPoint.x), to_q32(centerPoint.y),
+				 to_q32(theta)))
+		return vehicle_motion_refused(v, op, false);
+	return true;
+}
+
+bool vs_moveLinearAbs(vehicle_t *v, vs_position_t pos)
+{
+	static const char op[] = "moveLinearAbs";
+	if (!pose_ok(&pos))
+		return vehicle_refuse(v, op, ALM_W_BAD_ARGUMENT);
+	if (!vehicle_move_gate(v, op, VEHICLE_GATE_SERVO))
+		return false;
+	fx_pose_t p = pose_q32(&pos);
+	if (!motion_linear_abs(&v->motion, &p))
+		return vehicle_motion_refused(v, op, false);
+	return true;
+}
+
+bool vs_moveCruiseAbs(vehicle_t *v, vs_point_t cruisePoint)
+{
+	static const char op[] = "moveCruiseAbs";
+	if (!within(cruisePoint.x, POS_MAX_MM) || !within(cruisePoint.y, POS_MAX_MM))
+		return vehicle_refuse(v, op, ALM_W_BAD_ARGUMENT);
+	if (!vehicle_move_gate(v, op, VEHICLE_GATE_SERVO))
+		return false;
+	if (!motion_cruise_abs(&v->motion, to_q32(cruisePoint.x), to_q32(cruisePoint.y)))
+		return vehicle_motion_refused(v, op, false);
+	return true;
+}
+
+bool vs_moveContinuousRel(vehicle_t *v, vs_position_t pos)
+{
+	static const char op[] = "moveContinuousRel";
+	if (!pose_ok(&pos))
+		return vehicle_refuse(v, op, ALM_W_BAD_ARGUMENT);
+	if (!vehicle_move_gate(v, op, VEHICLE_GATE_SERVO))
+		return false;
+	fx_pose_t rel = pose_q32(&pos);
+	if (!motion_continuous_rel(&v->motion, &rel))
+		return vehicle_motion_refused(v, op, true);
+	return true;
+}
+
+bool vs_moveJog(vehicle_t *v, double xVel, double yVel, double thetaVel)
+{
+	static const char op[] = "moveJog";
+	if (!within(xVel, 1e300) || !within(yVel, 1e300) || !within(thetaVel, 1e300))
+		return vehicle_refuse(v, op, ALM_W_BAD_ARGUMENT);
+	/* Spec 6.6: magnitudes within the limits; signs reverse; zero stops. */
+	if (!within(xVel, v->cfg.vel_limit_t_mm_s) || !within(yVel, v->cfg.vel_limit_t_mm_s) ||
+	    !within(thetaVel, v->cfg.vel_limit_r_deg_s))
+		return vehicle_refuse(v, op, ALM_W_OVER_LIMIT);
+	if (v->cfg.kinematics == VS_KIN_DIFF && yVel != 0.0)
+		return vehicle_refuse(v, op, ALM_W_KINEMATICS);
+	if (!vehicle_move_gate(v, op, VEHICLE_GATE_JOG))
+		return false;
+	if (!motion_jog(&v->motion, to_q32(xVel), to_q32(yVel), to_q32(thetaVel)))
+		return vehicle_motion_refused(v, op, true);
+	return true;
+}

@@ -1,0 +1,111 @@
+/* The command table: proto/commands.def as data, for the console, the binary
+ * frames, the CAN mapping and the host client library.
+ *
+ * Every operation's in and out arguments are listed with a type code each
+ * (CMD_T_*), so a transport can encode and decode any operation generically
+ * into cmd_value_t arrays and run it with cmd_invoke().
+ *
+ * Table checksum (cmd_table_crc): CRC-16/CCITT-FALSE (poly 0x1021, init
+ * 0xFFFF, no reflection, no final xor) over the rows in opcode order, each
+ * serialised as the ASCII text
+ *     <name> ':' <opcode in decimal> ':' <in type codes> ':' <out type codes> '\n'
+ * e.g. "clearAlarm:1::\n" ... "getPosition:9::ddd\n". A host builds the same
+ * text from its own copy of the table and compares, to know it speaks the
+ * same command set as the unit.
+ */
+#ifndef CMDTAB_H
+#define CMDTAB_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "../firmware/vehicle.h"
+
+/* Bumped whenever a row's name, opcode or types change. */
+#define CMD_PROTO_VERSION 1
+/* Most in or out arguments of any operation (flattened). */
+#define CMD_MAX_FIELDS 3
+
+typedef enum {
+	CMD_T_BOOL = 'b',
+	CMD_T_SHORT = 'h',
+	CMD_T_ULONG = 'u',
+	CMD_T_DOUBLE = 'd',
+	CMD_T_STRING = 's',
+	CMD_T_ALARMS = 'a', /* sequence<Alarm> */
+} cmd_type_t;
+
+/* Opcodes, CMD_OP_<name>, fixed by the table. */
+enum {
+#define VS_CMD(name, op, it, in, ot, on, help) CMD_OP_##name = op,
+#include "commands.def"
+#undef VS_CMD
+};
+
+enum {
+	CMD_COUNT = 0
+#define VS_CMD(name, op, it, in, ot, on, help) +1
+#include "commands.def"
+#undef VS_CMD
+};
+
+typedef struct {
+	const char *name;
+	uint8_t opcode;
+	uint8_t n_in, n_out;
+	const char *in_types; /* cmd_type_t codes, one per field */
+	const char *in_names; /* space-separated field names */
+	const char *out_types;
+	const char *out_names;
+	const char *help;
+} cmd_def_t;
+
+/* The rows in opcode order: cmd_table[i].opcode == i + 1. */
+extern const cmd_def_t cmd_table[CMD_COUNT];
+
+/* NULL when unknown. Names match case-insensitively. */
+const cmd_def_t *cmd_by_name(const char *name);
+const cmd_def_t *cmd_by_opcode(unsigned opcode);
+
+/* Field i of a space-separated names list: returns its length and points
+ * *start at it (length 0 when there is no such field). */
+size_t cmd_field_name(const char *names, unsigned i, const char **start);
+/* IDL spelling of a type code ("boolean", "unsigned long", ...). */
+const char *cmd_type_idl(char type);
+
+/* CRC-16/CCITT-FALSE, continuing from crc (start with 0xFFFF). */
+uint16_t cmd_crc16(uint16_t crc, const void *data, size_t n);
+/* Checksum of the table (see the header comment). */
+uint16_t cmd_table_crc(void);
+
+/* One decoded argument. Strings and alarms point into the unit or into the
+ * caller's cmd_scratch_t and stay valid until the next call. */
+typedef struct {
+	const vs_alarm_t *a;
+	uint16_t n;
+} cmd_alarms_t;
+
+typedef union {
+	bool b;
+	int16_t h;
+	uint32_t u;
+	double d;
+	const char *s;
+	cmd_alarms_t alarms;
+} cmd_value_t;
+
+typedef struct {
+	vs_alarm_t alarms[VS_ALARM_LIST_MAX];
+	char msg[VS_STATE_MSG_MAX];
+} cmd_scratch_t;
+
+/* Runs one operation: in[] holds d->n_in values of d->in_types, out[]
+ * receives d->n_out values (always all of them, zero/empty when the
+ * operation leaves one unset). Returns the operation's boolean. The alarm
+ * sequence of getActiveAlarm is clamped to max(numOfAlarm, 0) and to
+ * VS_ALARM_LIST_MAX entries. */
+bool cmd_invoke(vehicle_t *v, const cmd_def_t *d, const cmd_value_t in[], cmd_value_t out[],
+		cmd_scratch_t *scratch);
+
+#endif

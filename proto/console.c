@@ -1,0 +1,537 @@
+/* Bring-up console: spec section 7, driven by the command table.
+ *
+ * A line is checked in this order, and the first failure is the one reply:
+ * length, control/non-ASCII bytes, operation name, argument count, each
+ * argument left to right. Only a line that passes all of them reaches the
+ * unit, so a bad line can never change its state or its queued motion.
+ */
+#include "console.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "cmdtab.h"
+#include "numparse.h"
+
+/* Tokens kept per line: an operation needs at most 1 + CMD_MAX_FIELDS; '$'
+ * commands get a few more. Further tokens are only counted. */
+#define CONSOLE_ARGV_MAX 16
+
+/* Bounded reply under construction; never writes past cap, always
+ * NUL-terminated when cap > 0. */
+typedef struct {
+	char *buf;
+	size_t cap, len;
+} rbuf_t;
+
+static void rb_init(rbuf_t *r, char *buf, size_t cap)
+{
+	r->buf = buf;
+	r->cap = cap;
+	r->len = 0;
+	if (cap)
+		buf[0] = '\0';
+}
+
+static size_t rb_room(const rbuf_t *r)
+{
+	return r->cap ? r->cap - 1 - r->len : 0;
+}
+
+static void rb_putn(rbuf_t *r, const char *s, size_t n)
+{
+	if (n > rb_room(r))
+		n = rb_room(r);
+	if (!n)
+		return;
+	memcpy(r->buf + r->len, s, n);
+	r->len += n;
+	r->buf[r->len] = '\0';
+}
+
+static void rb_puts(rbuf_t *r, const char *s)
+{
+	rb_putn(r, s, strlen(s));
+}
+
+__attribute__((format(printf, 2, 0))) static void rb_vprintf(rbuf_t *r, const char *fmt, va_list ap)
+{
+	size_t room = rb_room(r);
+	int n;
+
+	if (!r->cap)
+		return;
+	n = vsnprintf(r->buf + r->len, room + 1, fmt, ap);
+	if (n > 0)
+		r->len += (size_t)n < room ? (size_t)n : room;
+	r->buf[r->len] = '\0';
+}
+
+__attribute__((format(printf, 2, 3))) static void rb_printf(rbuf_t *r, const char *fmt, ...)
+{
+	va_list ap;
+
+	va_start(ap, fmt);
+	rb_vprintf(r, fmt, ap);
+	va_end(ap);
+}
+
+/* Exactly three decimals; a value that rounds to zero prints as 0.000, never
+ * -0.000. */
+static void rb_double(rbuf_t *r, double v)
+{
+	char tmp[400];
+	int n = snprintf(tmp, sizeof(tmp), "%.3f", v);
+
+	if (n <= 0)
+		return;
+	if (strcmp(tmp, "-0.000") == 0)
+		rb_puts(r, "0.000");
+	else
+		rb_puts(r, tmp);
+}
+
+static bool needs_hex(unsigned char b)
+{
+	return b < 0x20 || b >= 0x7f;
+}
+
+/* A double-quoted string: \" and \\ escaped, and control or non-ASCII bytes
+ * as \xHH so that a reply is always one printable line. */
+static void rb_quoted(rbuf_t *r, const char *s)
+{
+	rb_puts(r, "\"");
+	for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
+		if (*p == '"' || *p == '\\') {
+			char e[2] = {'\\', (char)*p};
+			rb_putn(r, e, 2);
+		} else if (needs_hex(*p)) {
+			rb_printf(r, "\\x%02X", *p);
+		} else {
+			rb_putn(r, (const char *)p, 1);
+		}
+	}
+	rb_puts(r, "\"");
+}
+
+/* Length rb_quoted() writes for s. */
+static size_t quoted_len(const char *s)
+{
+	size_t n = 2;
+
+	for (const unsigned char *p = (const unsigned char *)s; *p; p++)
+		n += (*p == '"' || *p == '\\') ? 2 : needs_hex(*p) ? 4 : 1;
+	return n;
+}
+
+static const char *alarm_type_name(uint8_t t)
+{
+	switch (t) {
+	case VS_ALARM_FAULT:
+		return "fault";
+	case VS_ALARM_WARNING:
+		return "warning";
+	default:
+		return "unknown";
+	}
+}
+
+static size_t ulong_digits(unsigned long v)
+{
+	size_t n = 1;
+
+	while (v >= 10) {
+		v /= 10;
+		n++;
+	}
+	return n;
+}
+
+/* The alarm sequence: its length, then "code type "source"" triples. When
+ * the reply cannot hold them all (16 alarms of 63 escaped bytes would need
+ * about 4.4 kB), only the alarms that fit whole are written and the length
+ * says how many: the reply stays well-formed, the sequence still holds at
+ * most numOfAlarm entries, and numOfActiveAlarm still tells the full count. */
+static void rb_alarms(rbuf_t *r, const cmd_alarms_t *s)
+{
+	uint16_t n = s->n > VS_ALARM_LIST_MAX ? VS_ALARM_LIST_MAX : s->n;
+	char src[VS_ALARM_LIST_MAX][VS_ALARM_SOURCE_MAX];
+	size_t used = 0;
+	uint16_t k;
+
+	for (k = 0; k < n; k++) {
+		const vs_alarm_t *a = &s->a[k];
+		size_t l;
+
+		/* The source need not be terminated by whoever filled it. */
+		memcpy(src[k], a->source, VS_ALARM_SOURCE_MAX);
+		src[k][VS_ALARM_SOURCE_MAX - 1] = '\0';
+		l = 1 + ulong_digits(a->code) + 1 + strlen(alarm_type_name(a->type)) + 1 +
+		    quoted_len(src[k]);
+		/* " 16" (the count) needs at most 3 bytes. */
+		if (3 + used + l > rb_room(r))
+			break;
+		used += l;
+	}
+	rb_printf(r, " %u", (unsigned)k);
+	for (uint16_t i = 0; i < k; i++) {
+		rb_printf(r, " %lu %s ", (unsigned long)s->a[i].code,
+			  alarm_type_name(s->a[i].type));
+		rb_quoted(r, src[i]);
+	}
+}
+
+static void rb_value(rbuf_t *r, char type, const cmd_value_t *v)
+{
+	switch (type) {
+	case CMD_T_BOOL:
+		rb_puts(r, v->b ? " true" : " false");
+		break;
+	case CMD_T_SHORT:
+		rb_printf(r, " %d", v->h);
+		break;
+	case CMD_T_ULONG:
+		rb_printf(r, " %lu", (unsigned long)v->u);
+		break;
+	case CMD_T_DOUBLE:
+		rb_puts(r, " ");
+		rb_double(r, v->d);
+		break;
+	case CMD_T_STRING:
+		rb_puts(r, " ");
+		rb_quoted(r, v->s ? v->s : "");
+		break;
+	case CMD_T_ALARMS:
+		rb_alarms(r, &v->alarms);
+		break;
+	default:
+		break;
+	}
+}
+
+/* Replaces whatever the reply holds with "error <text>". */
+__attribute__((format(printf, 3, 4))) static bool reply_error(console_t *c, rbuf_t *r,
+							      const char *fmt, ...)
+{
+	va_list ap;
+
+	rb_init(r, r->buf, r->cap);
+	rb_puts(r, "error ");
+	va_start(ap, fmt);
+	rb_vprintf(r, fmt, ap);
+	va_end(ap);
+	c->errors++;
+	return true;
+}
+
+static const char *mode_name(uint8_t m)
+{
+	static const char *const names[] = {"idle", "path", "jog", "continuous", "joystick"};
+
+	return m < sizeof(names) / sizeof(names[0]) ? names[m] : "?";
+}
+
+static double q32_to_double(q32_t v)
+{
+	return (double)v / 4294967296.0;
+}
+
+static void rb_pose(rbuf_t *r, const fx_pose_t *p)
+{
+	rb_puts(r, " ");
+	rb_double(r, q32_to_double(p->x_mm));
+	rb_puts(r, " ");
+	rb_double(r, q32_to_double(p->y_mm));
+	rb_puts(r, " ");
+	rb_double(r, q32_to_double(p->th_deg));
+}
+
+/* "boolean name(in double x_, out short state, ...)" */
+static void rb_signature(rbuf_t *r, const cmd_def_t *d)
+{
+	bool first = true;
+
+	rb_printf(r, "boolean %s(", d->name);
+	for (int dir = 0; dir < 2; dir++) {
+		const char *types = dir ? d->out_types : d->in_types;
+		const char *names = dir ? d->out_names : d->in_names;
+		unsigned n = dir ? d->n_out : d->n_in;
+
+		for (unsigned i = 0; i < n; i++) {
+			const char *fn;
+			size_t fl = cmd_field_name(names, i, &fn);
+
+			rb_printf(r, "%s%s %s %.*s", first ? "" : ", ", dir ? "out" : "in",
+				  cmd_type_idl(types[i]), (int)fl, fn);
+			first = false;
+		}
+	}
+	rb_puts(r, ")");
+}
+
+static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_t *r)
+{
+	const char *cmd = argv[0];
+
+	if (np_streq_nocase(cmd, "$help")) {
+		if (ntok == 1) {
+			rb_puts(r, "ok");
+			for (unsigned i = 0; i < CMD_COUNT; i++)
+				rb_printf(r, " %s", cmd_table[i].name);
+			return true;
+		}
+		if (ntok == 2) {
+			const cmd_def_t *d = cmd_by_name(argv[1]);
+
+			if (!d)
+				return reply_error(c, r, "%d $help: no operation %s",
+						   CONSOLE_E_EXTRA, argv[1]);
+			rb_printf(r, "ok %u ", d->opcode);
+			rb_signature(r, d);
+			rb_printf(r, ": %s", d->help);
+			return true;
+		}
+		return reply_error(c, r, "%d $help takes 0 or 1 argument, got %u", CONSOLE_E_ARITY,
+				   ntok - 1);
+	}
+	if (np_streq_nocase(cmd, "$version") || np_streq_nocase(cmd, "$diag")) {
+		if (ntok != 1)
+			return reply_error(c, r, "%d %s takes 0 arguments, got %u", CONSOLE_E_ARITY,
+					   cmd, ntok - 1);
+		if (np_streq_nocase(cmd, "$version")) {
+			const char *fw = "", *ifv = "";
+
+			vs_getVersion(c->v, &fw);
+			vs_getIFVersion(c->v, &ifv);
+			rb_puts(r, "ok firmware ");
+			rb_quoted(r, fw ? fw : "");
+			rb_puts(r, " interface ");
+			rb_quoted(r, ifv ? ifv : "");
+			rb_printf(r, " protocol %d table 0x%04X", CMD_PROTO_VERSION,
+				  (unsigned)cmd_table_crc());
+		} else {
+			vs_diag_t d;
+
+			memset(&d, 0, sizeof(d));
+			vehicle_diag(c->v, &d);
+			rb_printf(r, "ok ticks %lu overruns %lu mode %s queue %u ref",
+				  (unsigned long)d.ticks, (unsigned long)d.overruns,
+				  mode_name(d.mode), (unsigned)d.queue_len);
+			rb_pose(r, &d.ref_pose);
+			rb_puts(r, " odom");
+			rb_pose(r, &d.odom_pose);
+		}
+		return true;
+	}
+	if (c->extra && r->cap) {
+		r->buf[0] = '\0';
+		if (c->extra(c->xctx, argc, argv, r->buf, r->cap)) {
+			r->buf[r->cap - 1] = '\0';
+			r->len = strlen(r->buf);
+			if (r->len == 0)
+				rb_puts(r, "ok");
+			if (strncmp(r->buf, "error", 5) == 0)
+				c->errors++;
+			return true;
+		}
+		r->buf[0] = '\0';
+		r->len = 0;
+	}
+	return reply_error(c, r, "%d unknown command %s", CONSOLE_E_UNKNOWN_OP, cmd);
+}
+
+static bool is_space(char ch)
+{
+	return ch == ' ' || ch == '\t' || ch == '\r' || ch == '\n';
+}
+
+/* One line of len bytes (it may hold NUL bytes, which are garbage). */
+static bool exec_line(console_t *c, const char *line, size_t len, char *reply, size_t cap)
+{
+	char buf[CONSOLE_LINE_MAX + 1];
+	char *argv[CONSOLE_ARGV_MAX + 1];
+	unsigned ntok = 0;
+	size_t i = 0;
+	rbuf_t r;
+	const cmd_def_t *d;
+	cmd_value_t in[CMD_MAX_FIELDS], out[CMD_MAX_FIELDS];
+	cmd_scratch_t scratch;
+	bool ok;
+
+	rb_init(&r, reply, cap);
+	while (i < len && (line[i] == ' ' || line[i] == '\t'))
+		i++;
+	if (len > CONSOLE_LINE_MAX) {
+		c->lines++;
+		return reply_error(c, &r, "%d line too long (max %d bytes)", CONSOLE_E_TOO_LONG,
+				   CONSOLE_LINE_MAX);
+	}
+	/* A comment is ignored whatever it holds (scripts may carry UTF-8). */
+	if (i < len && line[i] == '#')
+		return false;
+	for (size_t k = 0; k < len; k++) {
+		unsigned char b = (unsigned char)line[k];
+
+		if ((b < 0x20 && b != '\t' && b != '\r' && b != '\n') || b >= 0x7f) {
+			c->lines++;
+			return reply_error(c, &r, "%d binary data in line", CONSOLE_E_BINARY);
+		}
+	}
+	memcpy(buf, line, len);
+	buf[len] = '\0';
+	for (char *p = buf; *p;) {
+		while (is_space(*p))
+			*p++ = '\0';
+		if (!*p)
+			break;
+		if (ntok < CONSOLE_ARGV_MAX)
+			argv[ntok] = p;
+		ntok++;
+		while (*p && !is_space(*p))
+			p++;
+	}
+	if (ntok == 0)
+		return false;
+	argv[ntok < CONSOLE_ARGV_MAX ? ntok : CONSOLE_ARGV_MAX] = NULL;
+	c->lines++;
+
+	if (argv[0][0] == '$') {
+		if (ntok > CONSOLE_ARGV_MAX)
+			return reply_error(c, &r, "%d %s: too many arguments (%u)", CONSOLE_E_ARITY,
+					   argv[0], ntok - 1);
+		return exec_extra(c, (int)ntok, argv, ntok, &r);
+	}
+
+	d = cmd_by_name(argv[0]);
+	if (!d)
+		return reply_error(c, &r, "%d unknown operation %s", CONSOLE_E_UNKNOWN_OP, argv[0]);
+	if (ntok - 1 != d->n_in)
+		return reply_error(c, &r, "%d %s takes %u argument%s, got %u", CONSOLE_E_ARITY,
+				   d->name, d->n_in, d->n_in == 1 ? "" : "s", ntok - 1);
+
+	for (unsigned k = 0; k < d->n_in; k++) {
+		const char *tok = argv[k + 1];
+		const char *fn;
+		int fl = (int)cmd_field_name(d->in_names, k, &fn);
+		int64_t iv = 0;
+		np_result_t pr;
+
+		switch (d->in_types[k]) {
+		case CMD_T_BOOL:
+			if (!np_parse_bool(tok, &in[k].b))
+				return reply_error(
+				    c, &r, "%d %s %.*s: bad boolean %s (true|false|1|0|on|off)",
+				    CONSOLE_E_BOOL, d->name, fl, fn, tok);
+			break;
+		case CMD_T_DOUBLE:
+			if (np_parse_double(tok, &in[k].d) != NP_OK)
+				return reply_error(c, &r, "%d %s %.*s: bad number %s",
+						   CONSOLE_E_NUMBER, d->name, fl, fn, tok);
+			break;
+		case CMD_T_SHORT:
+		case CMD_T_ULONG: {
+			bool sh = d->in_types[k] == CMD_T_SHORT;
+			int64_t lo = sh ? INT16_MIN : 0, hi = sh ? INT16_MAX : (int64_t)UINT32_MAX;
+
+			pr = np_parse_int(tok, lo, hi, &iv);
+			if (pr == NP_SYNTAX)
+				return reply_error(c, &r, "%d %s %.*s: bad number %s",
+						   CONSOLE_E_NUMBER, d->name, fl, fn, tok);
+			if (pr == NP_RANGE)
+				return reply_error(c, &r,
+						   "%d %s %.*s: %s is not an integer in %lld..%lld",
+						   CONSOLE_E_RANGE, d->name, fl, fn, tok,
+						   (long long)lo, (long long)hi);
+			if (sh)
+				in[k].h = (int16_t)iv;
+			else
+				in[k].u = (uint32_t)iv;
+			break;
+		}
+		default:
+			/* The table never has other in types; refuse rather than guess. */
+			return reply_error(c, &r, "%d %s: unsupported argument type",
+					   CONSOLE_E_NUMBER, d->name);
+		}
+	}
+
+	ok = cmd_invoke(c->v, d, in, out, &scratch);
+	rb_puts(&r, ok ? "ok true" : "ok false");
+	for (unsigned k = 0; k < d->n_out; k++)
+		rb_value(&r, d->out_types[k], &out[k]);
+	return true;
+}
+
+void console_init(console_t *c, vehicle_t *v, console_write_fn write, void *wctx)
+{
+	memset(c, 0, sizeof(*c));
+	c->v = v;
+	c->write = write;
+	c->wctx = wctx;
+}
+
+void console_set_extra(console_t *c, console_extra_fn fn, void *ctx)
+{
+	c->extra = fn;
+	c->xctx = ctx;
+}
+
+bool console_exec(console_t *c, const char *line, char *reply, size_t cap)
+{
+	/* Look no further than one byte past the limit: that is enough to know
+	 * the line is too long. */
+	size_t len = strnlen(line, CONSOLE_LINE_MAX + 1);
+
+	return exec_line(c, line, len, reply, cap);
+}
+
+static void emit(console_t *c, char *reply, size_t len)
+{
+	reply[len] = '\n';
+	if (c->write)
+		c->write(c->wctx, reply, len + 1);
+}
+
+static void end_line(console_t *c)
+{
+	char reply[CONSOLE_REPLY_MAX + 1];
+
+	if (c->overflow) {
+		rbuf_t r;
+
+		c->lines++;
+		rb_init(&r, reply, CONSOLE_REPLY_MAX);
+		reply_error(c, &r, "%d line too long (max %d bytes)", CONSOLE_E_TOO_LONG,
+			    CONSOLE_LINE_MAX);
+		emit(c, reply, r.len);
+	} else if (exec_line(c, c->line, c->len, reply, CONSOLE_REPLY_MAX)) {
+		emit(c, reply, strlen(reply));
+	}
+	c->len = 0;
+	c->overflow = false;
+}
+
+void console_feed(console_t *c, const uint8_t *data, size_t n)
+{
+	for (size_t i = 0; i < n; i++) {
+		uint8_t b = data[i];
+
+		if (b == '\n' && c->last_cr) {
+			c->last_cr = false;
+			continue;
+		}
+		c->last_cr = b == '\r';
+		if (b == '\r' || b == '\n') {
+			end_line(c);
+			continue;
+		}
+		if (c->overflow)
+			continue;
+		if (c->len >= CONSOLE_LINE_MAX) {
+			c->overflow = true;
+			continue;
+		}
+		c->line[c->len++] = (char)b;
+	}
+}
