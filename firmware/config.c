@@ -56,10 +56,10 @@ void vs_config_defaults(vs_config_t *c)
 		uint8_t dir, width;
 		const char *name;
 	} io[] = {
-		{1, VS_IO_IN, 8, "din0"},
-		{2, VS_IO_IN, 1, "dock_contact"},
-		{3, VS_IO_OUT, 8, "dout0"},
-		{4, VS_IO_OUT, 1, "lamp"},
+	    {1, VS_IO_IN, 8, "din0"},
+	    {2, VS_IO_IN, 1, "dock_contact"},
+	    {3, VS_IO_OUT, 8, "dout0"},
+	    {4, VS_IO_OUT, 1, "lamp"},
 	};
 	c->num_io = (uint8_t)(sizeof io / sizeof io[0]);
 	for (unsigned i = 0; i < VS_MAX_IO; i++) {

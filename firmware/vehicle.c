@@ -511,8 +511,8 @@ static void supervise_encoders(vehicle_t *v, const int32_t prev[])
 	char s[VS_ALARM_SOURCE_MAX];
 	for (uint8_t i = 0; i < v->naxes; i++) {
 		int32_t cps = v->wheel_cps_q8[i];
-		bool commanded = v->servo && (cps >= v->encoder_stuck_cps_q8 ||
-					      cps <= -v->encoder_stuck_cps_q8);
+		bool commanded =
+		    v->servo && (cps >= v->encoder_stuck_cps_q8 || cps <= -v->encoder_stuck_cps_q8);
 		if (!commanded || v->meas_counts[i] != prev[i]) {
 			v->encoder_still_ticks[i] = 0;
 			continue;
@@ -619,8 +619,9 @@ static void feed_joystick(vehicle_t *v)
 	int16_t x = 0, y = 0, r = 0;
 	if (v->servo && !v->locked && !v->stuck) {
 		x = deadband(js.axis[0], v->joystick_deadband_q15);
-		y = v->cfg.kinematics == VS_KIN_OMNI ? deadband(js.axis[1], v->joystick_deadband_q15)
-						     : 0;
+		y = v->cfg.kinematics == VS_KIN_OMNI
+			? deadband(js.axis[1], v->joystick_deadband_q15)
+			: 0;
 		r = deadband(js.axis[2], v->joystick_deadband_q15);
 	}
 	motion_joystick_input(&v->motion, x, y, r, true);
@@ -656,7 +657,8 @@ void vehicle_tick(vehicle_t *v, uint32_t now_us)
 	if (v->servo && ferr > v->following_err_max_counts) {
 		char s[VS_ALARM_SOURCE_MAX];
 		size_t pos = put_str(s, sizeof s, 0, "following error ");
-		pos = put_dec(s, sizeof s, pos, (uint32_t)(ferr > UINT32_MAX ? UINT32_MAX : ferr), 1);
+		pos =
+		    put_dec(s, sizeof s, pos, (uint32_t)(ferr > UINT32_MAX ? UINT32_MAX : ferr), 1);
 		put_str(s, sizeof s, pos, " counts");
 		raise_fault(v, ALM_F_FOLLOWING, s);
 	}

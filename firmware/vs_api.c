@@ -15,10 +15,10 @@
 
 #include "vehicle.h"
 
-#define POS_MAX_MM 1e6
+#define POS_MAX_MM    1e6
 #define ANGLE_MAX_DEG 36000.0
-#define TWO_POW_32 4294967296.0
-#define PI_D 3.14159265358979323846
+#define TWO_POW_32    4294967296.0
+#define PI_D	      3.14159265358979323846
 
 /* Finite and |x| <= lim. */
 static bool within(double x, double lim)
@@ -93,13 +93,13 @@ int vehicle_init(vehicle_t *v, const vs_config_t *cfg, const vs_hal_t *hal, cons
 	v->naxes = vs_config_axes(cfg);
 
 	motion_params_t mp = {
-		.tick_hz = cfg->tick_hz,
-		.kin = cfg->kinematics == VS_KIN_OMNI ? MOTION_KIN_OMNI : MOTION_KIN_DIFF,
-		.vel_limit_t = to_q32(cfg->vel_limit_t_mm_s),
-		.vel_limit_r = to_q32(cfg->vel_limit_r_deg_s),
-		.acc_limit_t = to_q32(cfg->acc_limit_t_mm_s2),
-		.acc_limit_r = to_q32(cfg->acc_limit_r_deg_s2),
-		.cruise_blend_mm = to_q32(cfg->cruise_blend_mm),
+	    .tick_hz = cfg->tick_hz,
+	    .kin = cfg->kinematics == VS_KIN_OMNI ? MOTION_KIN_OMNI : MOTION_KIN_DIFF,
+	    .vel_limit_t = to_q32(cfg->vel_limit_t_mm_s),
+	    .vel_limit_r = to_q32(cfg->vel_limit_r_deg_s),
+	    .acc_limit_t = to_q32(cfg->acc_limit_t_mm_s2),
+	    .acc_limit_r = to_q32(cfg->acc_limit_r_deg_s2),
+	    .cruise_blend_mm = to_q32(cfg->cruise_blend_mm),
 	};
 	motion_init(&v->motion, &mp);
 	motion_set_velocity(&v->motion, to_q32(cfg->vel_default_t_mm_s),
@@ -111,18 +111,18 @@ int vehicle_init(vehicle_t *v, const vs_config_t *cfg, const vs_hal_t *hal, cons
 	double circumference = PI_D * cfg->wheel_diameter_mm;
 	double counts_per_mm = (double)cfg->encoder_counts_per_rev / circumference;
 	double half = cfg->kinematics == VS_KIN_OMNI
-			      ? (cfg->wheel_base_mm + cfg->track_width_mm) / 2.0
-			      : cfg->track_width_mm / 2.0;
+			  ? (cfg->wheel_base_mm + cfg->track_width_mm) / 2.0
+			  : cfg->track_width_mm / 2.0;
 	double mm_per_deg = half * PI_D / 180.0;
 	kin_params_t kp = {
-		.kin = (uint8_t)mp.kin,
-		.n = v->naxes,
-		.tick_hz = cfg->tick_hz,
-		.counts_per_mm = to_q32(counts_per_mm),
-		.mm_per_count = to_q32(1.0 / counts_per_mm),
-		.mm_per_deg = to_q32(mm_per_deg),
-		.deg_per_mm = to_q32(1.0 / mm_per_deg),
-		.kp_q16 = (int64_t)(cfg->wheel_kp_per_s * 65536.0 + 0.5),
+	    .kin = (uint8_t)mp.kin,
+	    .n = v->naxes,
+	    .tick_hz = cfg->tick_hz,
+	    .counts_per_mm = to_q32(counts_per_mm),
+	    .mm_per_count = to_q32(1.0 / counts_per_mm),
+	    .mm_per_deg = to_q32(mm_per_deg),
+	    .deg_per_mm = to_q32(1.0 / mm_per_deg),
+	    .kp_q16 = (int64_t)(cfg->wheel_kp_per_s * 65536.0 + 0.5),
 	};
 	kin_init(&v->kin, &kp);
 

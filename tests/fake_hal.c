@@ -121,20 +121,20 @@ static uint32_t f_battery_mv(void *ctx)
 }
 
 const vs_hal_ops_t fake_hal_ops = {
-	.drive_set_velocity = f_drive_set_velocity,
-	.drive_enable = f_drive_enable,
-	.drive_read = f_drive_read,
-	.drive_reset_fault = f_drive_reset_fault,
-	.power_set = f_power_set,
-	.power_feedback = f_power_feedback,
-	.io_read = f_io_read,
-	.io_write = f_io_write,
-	.contact = f_contact,
-	.obstacle = f_obstacle,
-	.obstacle_caution = f_caution,
-	.estop = f_estop,
-	.joystick = f_joystick,
-	.battery_mv = f_battery_mv,
+    .drive_set_velocity = f_drive_set_velocity,
+    .drive_enable = f_drive_enable,
+    .drive_read = f_drive_read,
+    .drive_reset_fault = f_drive_reset_fault,
+    .power_set = f_power_set,
+    .power_feedback = f_power_feedback,
+    .io_read = f_io_read,
+    .io_write = f_io_write,
+    .contact = f_contact,
+    .obstacle = f_obstacle,
+    .obstacle_caution = f_caution,
+    .estop = f_estop,
+    .joystick = f_joystick,
+    .battery_mv = f_battery_mv,
 };
 
 void fake_hal_init(fake_hal_t *f, uint32_t tick_hz)

@@ -19,20 +19,20 @@ typedef struct {
 
 	/* Drives. */
 	int32_t counts[VS_MAX_AXES];
-	int64_t rem[VS_MAX_AXES];        /* sub-count remainder, units of 1/(256*tick_hz) */
+	int64_t rem[VS_MAX_AXES];	 /* sub-count remainder, units of 1/(256*tick_hz) */
 	int32_t cmd_cps_q8[VS_MAX_AXES]; /* last setpoint */
-	bool enabled[VS_MAX_AXES];       /* as commanded by drive_enable */
-	bool frozen[VS_MAX_AXES];        /* encoder stops counting */
+	bool enabled[VS_MAX_AXES];	 /* as commanded by drive_enable */
+	bool frozen[VS_MAX_AXES];	 /* encoder stops counting */
 	uint16_t fault_code[VS_MAX_AXES];
-	bool silent[VS_MAX_AXES];        /* replies missing: fresh = false */
+	bool silent[VS_MAX_AXES]; /* replies missing: fresh = false */
 	unsigned set_velocity_calls[VS_MAX_AXES];
 	unsigned enable_calls[VS_MAX_AXES];
 	unsigned reset_fault_calls[VS_MAX_AXES];
 
 	/* Main relay. */
-	bool relay;          /* closed */
-	bool relay_fail;     /* commanding it on does not close it */
-	bool feedback_lost;  /* feedback contact reads open although commanded on */
+	bool relay;	    /* closed */
+	bool relay_fail;    /* commanding it on does not close it */
+	bool feedback_lost; /* feedback contact reads open although commanded on */
 	unsigned power_set_calls;
 	bool last_power_set;
 

@@ -170,43 +170,156 @@ static void expect_bad(mutate_fn fn, int rc, const char *name)
 	assert_string_equal(field, name);
 }
 
-static void m_kin(vs_config_t *c) { c->kinematics = (vs_kinematics_t)2; }
-static void m_tick_lo(vs_config_t *c) { c->tick_hz = 99; }
-static void m_tick_hi(vs_config_t *c) { c->tick_hz = 10001; }
-static void m_wheel(vs_config_t *c) { c->wheel_diameter_mm = 0.0; }
-static void m_wheel_nan(vs_config_t *c) { c->wheel_diameter_mm = NAN; }
-static void m_track_inf(vs_config_t *c) { c->track_width_mm = INFINITY; }
-static void m_base_omni(vs_config_t *c) { c->kinematics = VS_KIN_OMNI; c->wheel_base_mm = 0.0; }
-static void m_cpr(vs_config_t *c) { c->encoder_counts_per_rev = 0; }
-static void m_vlim(vs_config_t *c) { c->vel_limit_t_mm_s = 0.0; }
-static void m_vlim_r(vs_config_t *c) { c->vel_limit_r_deg_s = -1.0; }
-static void m_alim(vs_config_t *c) { c->acc_limit_t_mm_s2 = NAN; }
-static void m_alim_r(vs_config_t *c) { c->acc_limit_r_deg_s2 = 1e9; }
-static void m_vdef(vs_config_t *c) { c->vel_default_t_mm_s = 1000.5; }
-static void m_vdef_r(vs_config_t *c) { c->vel_default_r_deg_s = 0.0; }
-static void m_adef(vs_config_t *c) { c->acc_default_t_mm_s2 = 2000.0; }
-static void m_adef_r(vs_config_t *c) { c->acc_default_r_deg_s2 = 361.0; }
-static void m_jog(vs_config_t *c) { c->jog_timeout_default_ms = 0; }
-static void m_jog_hi(vs_config_t *c) { c->jog_timeout_default_ms = 40000; }
-static void m_kp(vs_config_t *c) { c->wheel_kp_per_s = 0.0; }
-static void m_kp_tick(vs_config_t *c) { c->tick_hz = 100; c->wheel_kp_per_s = 26.0; }
-static void m_ferr(vs_config_t *c) { c->following_error_mm = 0.0; }
-static void m_stuck(vs_config_t *c) { c->encoder_stuck_ms = 0; }
-static void m_dto(vs_config_t *c) { c->drive_timeout_ms = 0; }
-static void m_blend(vs_config_t *c) { c->cruise_blend_mm = -1.0; }
-static void m_caution(vs_config_t *c) { c->caution_vel_t_mm_s = 1001.0; }
-static void m_bat_crit(vs_config_t *c) { c->battery_critical_v = 0.0; }
-static void m_bat_order(vs_config_t *c) { c->battery_low_v = 20.0; }
-static void m_deadband(vs_config_t *c) { c->joystick_deadband = 0.6; }
-static void m_fwver(vs_config_t *c) { c->firmware_version = ""; }
-static void m_cpr_fast(vs_config_t *c) { c->encoder_counts_per_rev = 1u << 24; }
-static void m_num_io(vs_config_t *c) { c->num_io = VS_MAX_IO + 1; }
-static void m_io_zero(vs_config_t *c) { c->io[1].id = 0; }
-static void m_io_dup(vs_config_t *c) { c->io[3].id = 2; }
-static void m_io_width0(vs_config_t *c) { c->io[0].width = 0; }
-static void m_io_width33(vs_config_t *c) { c->io[2].width = 33; }
-static void m_io_dir(vs_config_t *c) { c->io[2].dir = 7; }
-static void m_io_name(vs_config_t *c) { memset(c->io[0].name, 'n', VS_IO_NAME_MAX); }
+static void m_kin(vs_config_t *c)
+{
+	c->kinematics = (vs_kinematics_t)2;
+}
+static void m_tick_lo(vs_config_t *c)
+{
+	c->tick_hz = 99;
+}
+static void m_tick_hi(vs_config_t *c)
+{
+	c->tick_hz = 10001;
+}
+static void m_wheel(vs_config_t *c)
+{
+	c->wheel_diameter_mm = 0.0;
+}
+static void m_wheel_nan(vs_config_t *c)
+{
+	c->wheel_diameter_mm = NAN;
+}
+static void m_track_inf(vs_config_t *c)
+{
+	c->track_width_mm = INFINITY;
+}
+static void m_base_omni(vs_config_t *c)
+{
+	c->kinematics = VS_KIN_OMNI;
+	c->wheel_base_mm = 0.0;
+}
+static void m_cpr(vs_config_t *c)
+{
+	c->encoder_counts_per_rev = 0;
+}
+static void m_vlim(vs_config_t *c)
+{
+	c->vel_limit_t_mm_s = 0.0;
+}
+static void m_vlim_r(vs_config_t *c)
+{
+	c->vel_limit_r_deg_s = -1.0;
+}
+static void m_alim(vs_config_t *c)
+{
+	c->acc_limit_t_mm_s2 = NAN;
+}
+static void m_alim_r(vs_config_t *c)
+{
+	c->acc_limit_r_deg_s2 = 1e9;
+}
+static void m_vdef(vs_config_t *c)
+{
+	c->vel_default_t_mm_s = 1000.5;
+}
+static void m_vdef_r(vs_config_t *c)
+{
+	c->vel_default_r_deg_s = 0.0;
+}
+static void m_adef(vs_config_t *c)
+{
+	c->acc_default_t_mm_s2 = 2000.0;
+}
+static void m_adef_r(vs_config_t *c)
+{
+	c->acc_default_r_deg_s2 = 361.0;
+}
+static void m_jog(vs_config_t *c)
+{
+	c->jog_timeout_default_ms = 0;
+}
+static void m_jog_hi(vs_config_t *c)
+{
+	c->jog_timeout_default_ms = 40000;
+}
+static void m_kp(vs_config_t *c)
+{
+	c->wheel_kp_per_s = 0.0;
+}
+static void m_kp_tick(vs_config_t *c)
+{
+	c->tick_hz = 100;
+	c->wheel_kp_per_s = 26.0;
+}
+static void m_ferr(vs_config_t *c)
+{
+	c->following_error_mm = 0.0;
+}
+static void m_stuck(vs_config_t *c)
+{
+	c->encoder_stuck_ms = 0;
+}
+static void m_dto(vs_config_t *c)
+{
+	c->drive_timeout_ms = 0;
+}
+static void m_blend(vs_config_t *c)
+{
+	c->cruise_blend_mm = -1.0;
+}
+static void m_caution(vs_config_t *c)
+{
+	c->caution_vel_t_mm_s = 1001.0;
+}
+static void m_bat_crit(vs_config_t *c)
+{
+	c->battery_critical_v = 0.0;
+}
+static void m_bat_order(vs_config_t *c)
+{
+	c->battery_low_v = 20.0;
+}
+static void m_deadband(vs_config_t *c)
+{
+	c->joystick_deadband = 0.6;
+}
+static void m_fwver(vs_config_t *c)
+{
+	c->firmware_version = "";
+}
+static void m_cpr_fast(vs_config_t *c)
+{
+	c->encoder_counts_per_rev = 1u << 24;
+}
+static void m_num_io(vs_config_t *c)
+{
+	c->num_io = VS_MAX_IO + 1;
+}
+static void m_io_zero(vs_config_t *c)
+{
+	c->io[1].id = 0;
+}
+static void m_io_dup(vs_config_t *c)
+{
+	c->io[3].id = 2;
+}
+static void m_io_width0(vs_config_t *c)
+{
+	c->io[0].width = 0;
+}
+static void m_io_width33(vs_config_t *c)
+{
+	c->io[2].width = 33;
+}
+static void m_io_dir(vs_config_t *c)
+{
+	c->io[2].dir = 7;
+}
+static void m_io_name(vs_config_t *c)
+{
+	memset(c->io[0].name, 'n', VS_IO_NAME_MAX);
+}
 
 static void test_check_rejects(void **state)
 {
@@ -277,14 +390,14 @@ static void test_check_accepts_edges(void **state)
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
-		cmocka_unit_test(test_type_from_code),
-		cmocka_unit_test(test_newest_first),
-		cmocka_unit_test(test_reraise_moves_to_front),
-		cmocka_unit_test(test_full_drops_oldest),
-		cmocka_unit_test(test_source_truncated),
-		cmocka_unit_test(test_defaults),
-		cmocka_unit_test(test_check_rejects),
-		cmocka_unit_test(test_check_accepts_edges),
+	    cmocka_unit_test(test_type_from_code),
+	    cmocka_unit_test(test_newest_first),
+	    cmocka_unit_test(test_reraise_moves_to_front),
+	    cmocka_unit_test(test_full_drops_oldest),
+	    cmocka_unit_test(test_source_truncated),
+	    cmocka_unit_test(test_defaults),
+	    cmocka_unit_test(test_check_rejects),
+	    cmocka_unit_test(test_check_accepts_edges),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -108,24 +108,48 @@ static const vs_point_t C0 = {0.0, 200.0};
 
 /* Every move* operation with valid arguments. */
 typedef bool (*move_fn)(void);
-static bool mv_forward(void) { return vs_moveForward(&V, 100.0); }
-static bool mv_turn(void) { return vs_moveTurn(&V, 45.0); }
-static bool mv_linrel(void) { return vs_moveLinearRel(&V, P0); }
-static bool mv_circ(void) { return vs_moveCircularRel(&V, C0, 30.0); }
-static bool mv_linabs(void) { return vs_moveLinearAbs(&V, P0); }
-static bool mv_cruise(void) { return vs_moveCruiseAbs(&V, (vs_point_t){100.0, 0.0}); }
-static bool mv_cont(void) { return vs_moveContinuousRel(&V, P0); }
-static bool mv_jog(void) { return vs_moveJog(&V, 100.0, 0.0, 0.0); }
+static bool mv_forward(void)
+{
+	return vs_moveForward(&V, 100.0);
+}
+static bool mv_turn(void)
+{
+	return vs_moveTurn(&V, 45.0);
+}
+static bool mv_linrel(void)
+{
+	return vs_moveLinearRel(&V, P0);
+}
+static bool mv_circ(void)
+{
+	return vs_moveCircularRel(&V, C0, 30.0);
+}
+static bool mv_linabs(void)
+{
+	return vs_moveLinearAbs(&V, P0);
+}
+static bool mv_cruise(void)
+{
+	return vs_moveCruiseAbs(&V, (vs_point_t){100.0, 0.0});
+}
+static bool mv_cont(void)
+{
+	return vs_moveContinuousRel(&V, P0);
+}
+static bool mv_jog(void)
+{
+	return vs_moveJog(&V, 100.0, 0.0, 0.0);
+}
 
 static const struct {
 	move_fn fn;
 	const char *name;
 	bool ready_only;
 } MOVES[] = {
-	{mv_forward, "moveForward", true},   {mv_turn, "moveTurn", true},
-	{mv_linrel, "moveLinearRel", true},  {mv_circ, "moveCircularRel", true},
-	{mv_linabs, "moveLinearAbs", false}, {mv_cruise, "moveCruiseAbs", false},
-	{mv_cont, "moveContinuousRel", false}, {mv_jog, "moveJog", false},
+    {mv_forward, "moveForward", true},	   {mv_turn, "moveTurn", true},
+    {mv_linrel, "moveLinearRel", true},	   {mv_circ, "moveCircularRel", true},
+    {mv_linabs, "moveLinearAbs", false},   {mv_cruise, "moveCruiseAbs", false},
+    {mv_cont, "moveContinuousRel", false}, {mv_jog, "moveJog", false},
 };
 #define NMOVES (sizeof MOVES / sizeof MOVES[0])
 
@@ -424,8 +448,8 @@ static void test_active_alarm_counts(void **state)
 	assert_int_equal(n, 0);
 	assert_int_equal(len, 0);
 
-	assert_false(vs_moveTurn(&V, 10.0));            /* 121 */
-	assert_false(vs_setJogTimeout(&V, -5));         /* 111 */
+	assert_false(vs_moveTurn(&V, 10.0));		   /* 121 */
+	assert_false(vs_setJogTimeout(&V, -5));		   /* 111 */
 	assert_false(vs_getInput(&V, 99, &(uint32_t){0})); /* 126 */
 
 	memset(a, 0, sizeof a);
@@ -562,7 +586,8 @@ static void test_set_velocity(void **state)
 	assert_true(vs_setVelocity(&V, (vs_velocity_t){0.001, 0.001}));
 	assert_int_equal(alarm_count(), 0);
 	const vs_velocity_t bad[] = {
-		{0.0, 90.0}, {-1.0, 90.0}, {1000.001, 90.0}, {500.0, 0.0}, {500.0, -90.0}, {500.0, 180.5},
+	    {0.0, 90.0},  {-1.0, 90.0},	  {1000.001, 90.0},
+	    {500.0, 0.0}, {500.0, -90.0}, {500.0, 180.5},
 	};
 	for (unsigned i = 0; i < sizeof bad / sizeof bad[0]; i++) {
 		assert_true(vs_clearAlarm(&V));
@@ -570,12 +595,13 @@ static void test_set_velocity(void **state)
 		expect_warning(111, "setVelocity refused: out of limits");
 		assert_int_equal(alarm_count(), 1);
 	}
-	const vs_velocity_t nan_[] = {{NAN, 90.0}, {500.0, NAN}, {INFINITY, 90.0}, {500.0, -INFINITY},
-				      {1e300, 90.0}};
+	const vs_velocity_t nan_[] = {
+	    {NAN, 90.0}, {500.0, NAN}, {INFINITY, 90.0}, {500.0, -INFINITY}, {1e300, 90.0}};
 	for (unsigned i = 0; i < sizeof nan_ / sizeof nan_[0]; i++) {
 		assert_false(vs_setVelocity(&V, nan_[i]));
-		expect_warning(i == 4 ? 111 : 110, i == 4 ? "setVelocity refused: out of limits"
-							  : "setVelocity refused: invalid argument");
+		expect_warning(i == 4 ? 111 : 110, i == 4
+						       ? "setVelocity refused: out of limits"
+						       : "setVelocity refused: invalid argument");
 	}
 	/* The last accepted value is still in force. */
 	assert_true(V.vel_set.translation == 0.001);
@@ -659,7 +685,7 @@ static void test_set_get_position(void **state)
 	/* Refused: not finite or out of range; the pose keeps its value. */
 	assert_true(vs_setPosition(&V, (vs_position_t){10, 20, 30}));
 	const vs_position_t bad[] = {{NAN, 0, 0},     {0, INFINITY, 0}, {0, 0, -INFINITY},
-				     {1e6 + 1, 0, 0}, {0, -2e6, 0},     {0, 0, 36000.5}};
+				     {1e6 + 1, 0, 0}, {0, -2e6, 0},	{0, 0, 36000.5}};
 	for (unsigned i = 0; i < sizeof bad / sizeof bad[0]; i++) {
 		assert_false(vs_setPosition(&V, bad[i]));
 		expect_warning(110, "setPosition refused: invalid argument");
@@ -1103,7 +1129,7 @@ static void test_overrun(void **state)
 	assert_true(vs_clearAlarm(&V));
 	F.now_us = UINT32_MAX - 400;
 	vehicle_tick(&V, F.now_us); /* a jump backwards is not late */
-	F.now_us += 1000;           /* wraps past zero */
+	F.now_us += 1000;	    /* wraps past zero */
 	vehicle_tick(&V, F.now_us);
 	fake_run(&F, &V, 3);
 	vehicle_diag(&V, &d);
@@ -1148,47 +1174,47 @@ int main(void)
 {
 #define T(f) cmocka_unit_test_setup(f, setup)
 	const struct CMUnitTest tests[] = {
-		T(test_init_unpowered),
-		T(test_init_rejects),
-		T(test_constant_queries),
-		T(test_battery_voltage),
-		T(test_power_on_off),
-		T(test_power_relay_failure),
-		T(test_power_lost),
-		T(test_servo_table8),
-		T(test_state_codes),
-		T(test_state_code_padding),
-		T(test_active_alarm_counts),
-		T(test_clear_alarm_resets_drives),
-		T(test_get_input),
-		T(test_set_output),
-		T(test_servo_status_axes),
-		T(test_set_velocity),
-		T(test_set_acceleration),
-		T(test_set_jog_timeout),
-		T(test_always_true_ops),
-		T(test_set_get_position),
-		T(test_odometry_pushed_by_hand),
-		T(test_bad_arguments_refused),
-		T(test_jog_limits),
-		T(test_circular_center_x),
-		T(test_moves_refused_unpowered),
-		T(test_moves_refused_servo_off),
-		T(test_moves_refused_fault),
-		T(test_moves_refused_locked),
-		T(test_moves_refused_stuck),
-		T(test_moves_refused_joystick),
-		T(test_joystick_lost),
-		T(test_joystick_absent),
-		T(test_estop),
-		T(test_drive_fault_text),
-		T(test_drive_timeout),
-		T(test_following_error),
-		T(test_encoder_stuck),
-		T(test_battery_thresholds),
-		T(test_overrun),
-		T(test_caution_input),
-		T(test_warnings_do_not_block),
+	    T(test_init_unpowered),
+	    T(test_init_rejects),
+	    T(test_constant_queries),
+	    T(test_battery_voltage),
+	    T(test_power_on_off),
+	    T(test_power_relay_failure),
+	    T(test_power_lost),
+	    T(test_servo_table8),
+	    T(test_state_codes),
+	    T(test_state_code_padding),
+	    T(test_active_alarm_counts),
+	    T(test_clear_alarm_resets_drives),
+	    T(test_get_input),
+	    T(test_set_output),
+	    T(test_servo_status_axes),
+	    T(test_set_velocity),
+	    T(test_set_acceleration),
+	    T(test_set_jog_timeout),
+	    T(test_always_true_ops),
+	    T(test_set_get_position),
+	    T(test_odometry_pushed_by_hand),
+	    T(test_bad_arguments_refused),
+	    T(test_jog_limits),
+	    T(test_circular_center_x),
+	    T(test_moves_refused_unpowered),
+	    T(test_moves_refused_servo_off),
+	    T(test_moves_refused_fault),
+	    T(test_moves_refused_locked),
+	    T(test_moves_refused_stuck),
+	    T(test_moves_refused_joystick),
+	    T(test_joystick_lost),
+	    T(test_joystick_absent),
+	    T(test_estop),
+	    T(test_drive_fault_text),
+	    T(test_drive_timeout),
+	    T(test_following_error),
+	    T(test_encoder_stuck),
+	    T(test_battery_thresholds),
+	    T(test_overrun),
+	    T(test_caution_input),
+	    T(test_warnings_do_not_block),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

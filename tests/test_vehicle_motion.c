@@ -350,19 +350,19 @@ int main(void)
 {
 #define T(f) cmocka_unit_test_setup(f, setup)
 	const struct CMUnitTest tests[] = {
-		T(test_forward_busy_ready),
-		T(test_turn),
-		T(test_ready_only_refused_while_busy),
-		T(test_pause_idle_and_queue),
-		T(test_pause_while_moving),
-		T(test_stop_discards),
-		T(test_fault_halts_and_does_not_restart),
-		T(test_contact_locks_while_moving),
-		T(test_obstacle_stuck_while_moving),
-		T(test_queue_full),
-		T(test_jog_and_timeout),
-		T(test_joystick_drives),
-		T(test_encoder_stuck_while_moving),
+	    T(test_forward_busy_ready),
+	    T(test_turn),
+	    T(test_ready_only_refused_while_busy),
+	    T(test_pause_idle_and_queue),
+	    T(test_pause_while_moving),
+	    T(test_stop_discards),
+	    T(test_fault_halts_and_does_not_restart),
+	    T(test_contact_locks_while_moving),
+	    T(test_obstacle_stuck_while_moving),
+	    T(test_queue_full),
+	    T(test_jog_and_timeout),
+	    T(test_joystick_drives),
+	    T(test_encoder_stuck_while_moving),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }
