@@ -70,6 +70,8 @@ PROGRAMS += $(patsubst tools/%_main.c,$(BUILD)/%,$(TOOL_MAINS))
 TESTS := $(patsubst tests/%.c,$(BUILD)/tests/%,$(TEST_SRC))
 
 .PHONY: all run check clean bench format
+# Keep objects of test and tool programs (they are intermediate to pattern rules).
+.SECONDARY:
 all: $(FW_LIB) $(PROGRAMS) $(TESTS)
 
 # Objects: the flags follow the top-level folder of the source.

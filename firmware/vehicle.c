@@ -45,7 +45,7 @@ static size_t put_hex4(char *b, size_t cap, size_t pos, uint16_t val)
 	pos = put_str(b, cap, pos, "0x");
 	for (int sh = 12; sh >= 0; sh -= 4) {
 		if (pos + 1 < cap)
-			b[pos++] = hex[(val >> sh) & 0xFu];
+			b[pos++] = hex[((unsigned)val >> (unsigned)sh) & 0xFu];
 	}
 	if (pos < cap)
 		b[pos] = '\0';
