@@ -278,6 +278,30 @@ static void test_jog_watchdog(void **state)
 	assert_int_equal(r->s[r->n - 1].state, VS_STATE_READY);
 }
 
+
+static void test_set_velocity_while_moving(void **state)
+{
+	rig_t *r = *state;
+	exec_ok(r, "moveForward 5000", "ok true");
+	sim_run_ms(&r->sim, 3000);
+	assert_true(fabs(r->s[r->n - 1].v - VT) < 1e-6);
+	size_t change = r->n;
+	exec_ok(r, "setVelocity 150 60", "ok true");
+	sim_run_ms(&r->sim, 2000);
+	/* Down from 400 to 150 mm/s at the set 300 mm/s^2: 833 ms, in steps of
+	 * at most a x period, then held at 150. */
+	for (size_t i = change + 1; i < r->n; i++)
+		assert_true(r->s[i - 1].v - r->s[i].v <= AT / HZ * 1.0000001);
+	assert_true(r->s[change + 800].v > 150.0);
+	for (size_t i = change + 840; i < r->n; i++)
+		assert_true(fabs(r->s[i].v - 150.0) < 1e-6);
+	exec_ok(r, "setVelocity 400 60", "ok true");
+	run_until_ready(r, 60000);
+	sim_run_ms(&r->sim, 200);
+	assert_true(fabs(r->s[r->n - 1].x - 5000.0) <= 0.05);
+	assert_acc_within_1pct(r);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -287,6 +311,7 @@ int main(void)
 		cmocka_unit_test_setup_teardown(test_cruise_does_not_stop, setup, teardown),
 		cmocka_unit_test_setup_teardown(test_continuous_retarget_is_smooth, setup, teardown),
 		cmocka_unit_test_setup_teardown(test_jog_watchdog, setup, teardown),
+		cmocka_unit_test_setup_teardown(test_set_velocity_while_moving, setup, teardown),
 	};
 	return cmocka_run_group_tests_name("motion on the ideal plant", tests, NULL, NULL);
 }
