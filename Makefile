@@ -117,3 +117,6 @@ clean:
 	rm -rf $(BUILD)
 
 -include $(shell find $(BUILD)/obj -name '*.d' 2>/dev/null)
+
+# Optional parts: fuzzing, coverage, static analysis, cross builds, benchmarks.
+-include $(wildcard mk/*.mk)

@@ -537,6 +537,10 @@ static void supervise_inputs(vehicle_t *v)
 	if (v->powered && !o->power_feedback(c)) {
 		v->powered = false;
 		raise_fault(v, ALM_F_POWER_LOST, "main power lost");
+		/* Command the relay open as well: Unpowered means the circuit is
+		 * off, and a contact that recloses by itself must not bring the
+		 * drive supply back until setPower(true). */
+		o->power_set(c, false);
 	}
 
 	v->battery_mv = o->battery_mv(c);

@@ -9,17 +9,22 @@
  * held line is never read early. Every reply is flushed at once.
  */
 #include <errno.h>
+#include <fcntl.h>
 #include <getopt.h>
 #include <poll.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <termios.h>
 #include <time.h>
 #include <unistd.h>
 
 #include "../hal/config_xml.h"
+#include "../proto/client.h"
+#include "../proto/link.h"
 #include "sim.h"
+#include "sim_can.h"
 
 #define INBUF 4096
 
@@ -40,6 +45,15 @@ typedef struct {
 	/* realtime: input held until this monotonic time */
 	bool hold;
 	struct timespec hold_until;
+	/* --can: the CAN link, served every tick; the simulator then runs
+	 * until a signal even after stdin ends. */
+	sim_can_t can;
+	bool can_on;
+	/* --pty: console and binary frames on a pseudo-terminal (proto/link.h)
+	 * instead of stdin/stdout; runs until a signal. */
+	bool pty_on;
+	int pty_master, pty_slave;
+	link_t link;
 } app_t;
 
 static app_t app;
@@ -109,6 +123,53 @@ static bool read_input(app_t *a)
 	return true;
 }
 
+static size_t pty_read(void *ctx, uint8_t *buf, size_t max)
+{
+	app_t *a = ctx;
+	ssize_t r = read(a->pty_master, buf, max);
+
+	return r > 0 ? (size_t)r : 0;
+}
+
+static size_t pty_write(void *ctx, const uint8_t *buf, size_t len)
+{
+	app_t *a = ctx;
+	ssize_t r = write(a->pty_master, buf, len);
+
+	return r > 0 ? (size_t)r : 0;
+}
+
+/* Creates the pseudo-terminal, raw 8N1 at baud (nominal on a pty). The
+ * simulator keeps the slave side open too, so that hosts may come and go
+ * without the master seeing a hang-up. */
+static int pty_open(app_t *a, unsigned baud, char *path, size_t cap)
+{
+	const char *name;
+
+	a->pty_master = posix_openpt(O_RDWR | O_NOCTTY);
+	if (a->pty_master < 0 || grantpt(a->pty_master) != 0 || unlockpt(a->pty_master) != 0)
+		return -1;
+	name = ptsname(a->pty_master);
+	if (!name)
+		return -1;
+	snprintf(path, cap, "%s", name);
+	a->pty_slave = open(path, O_RDWR | O_NOCTTY);
+	if (a->pty_slave < 0 || vc_tty_set_raw(a->pty_slave, baud) != 0)
+		return -1;
+	{
+		struct termios t;
+
+		/* The master side sees the bytes as they are, too. */
+		if (tcgetattr(a->pty_master, &t) == 0) {
+			cfmakeraw(&t);
+			tcsetattr(a->pty_master, TCSANOW, &t);
+		}
+	}
+	if (fcntl(a->pty_master, F_SETFL, fcntl(a->pty_master, F_GETFL) | O_NONBLOCK) != 0)
+		return -1;
+	return 0;
+}
+
 static int run_fast(app_t *a)
 {
 	while (!stop_requested && !a->write_failed) {
@@ -131,15 +192,21 @@ static int run_realtime(app_t *a)
 		clock_gettime(CLOCK_MONOTONIC, &now);
 		if (a->hold && !ts_before(&now, &a->hold_until))
 			a->hold = false;
-		if (!a->hold) {
+		if (a->pty_on) {
+			/* '$wait' holds the port's further input, as it holds stdin. */
+			if (!a->hold)
+				link_poll(&a->link, (uint32_t)(a->sim.now_us / 1000u));
+		} else if (!a->hold) {
 			struct pollfd pfd = {.fd = STDIN_FILENO, .events = POLLIN};
 			if (!a->eof && poll(&pfd, 1, 0) > 0 && !read_input(a))
 				return 1;
 			feed_lines(a);
-			if (a->eof && a->in_len == 0 && !a->hold)
+			if (a->eof && a->in_len == 0 && !a->hold && !a->can_on)
 				break;
 		}
 		sim_tick(&a->sim);
+		if (a->can_on)
+			sim_can_poll(&a->can);
 
 		ts_add_ns(&next, period_ns);
 		clock_gettime(CLOCK_MONOTONIC, &now);
@@ -169,6 +236,14 @@ static void usage(FILE *f)
 	      "  --trace-every N one trace row every N ticks\n"
 	      "  --ideal         ideal plant: no motor lag, no acceleration/current limit,\n"
 	      "                  2^20-count encoders (overrides the configured resolution)\n"
+	      "  --can IFACE     serve the CAN link on SocketCAN interface IFACE (docs/can.md);\n"
+	      "                  implies --realtime, keeps running after stdin ends\n"
+	      "  --node N        CAN node id, 1..127 (default 1)\n"
+	      "  --status-hz N   CAN status frame rate, 0 (off)..1000 (default 10)\n"
+	      "  --pty           serve the serial link (console and binary frames, docs/protocol.md)\n"
+	      "                  on a new pseudo-terminal instead of stdin/stdout; prints its path\n"
+	      "                  as the first line on stdout; implies --realtime, runs until a signal\n"
+	      "  --baud N        line speed set on the pty (default 115200; nominal on a pty)\n"
 	      "  --help          this text\n"
 	      "Console on stdin/stdout (spec section 7); simulator extras: $wait MS, $sim ...\n"
 	      "(see host_sim/sim.h).\n",
@@ -182,8 +257,14 @@ int main(int argc, char **argv)
 	unsigned long trace_every = 1;
 	int realtime = -1;
 	bool ideal = false;
+	const char *can_iface = NULL;
+	unsigned long can_node = CANLINK_NODE_DEFAULT, can_hz = CANLINK_STATUS_HZ_DEFAULT;
 
-	enum { O_CONFIG = 1, O_IO, O_RT, O_FAST, O_TRACE, O_EVERY, O_IDEAL, O_HELP };
+	bool pty = false;
+	unsigned long baud = VC_DEFAULT_BAUD;
+
+	enum { O_CONFIG = 1, O_IO, O_RT, O_FAST, O_TRACE, O_EVERY, O_IDEAL, O_HELP, O_CAN, O_NODE, O_HZ,
+	       O_PTY, O_BAUD };
 	static const struct option opts[] = {
 	    {"config", required_argument, NULL, O_CONFIG},
 	    {"io", required_argument, NULL, O_IO},
@@ -193,6 +274,11 @@ int main(int argc, char **argv)
 	    {"trace-every", required_argument, NULL, O_EVERY},
 	    {"ideal", no_argument, NULL, O_IDEAL},
 	    {"help", no_argument, NULL, O_HELP},
+	    {"can", required_argument, NULL, O_CAN},
+	    {"node", required_argument, NULL, O_NODE},
+	    {"status-hz", required_argument, NULL, O_HZ},
+	    {"pty", no_argument, NULL, O_PTY},
+	    {"baud", required_argument, NULL, O_BAUD},
 	    {NULL, 0, NULL, 0},
 	};
 	int o;
@@ -229,6 +315,33 @@ int main(int argc, char **argv)
 		case O_HELP:
 			usage(stdout);
 			return 0;
+		case O_CAN:
+			can_iface = optarg;
+			break;
+		case O_PTY:
+			pty = true;
+			break;
+		case O_BAUD: {
+			char *end;
+			baud = strtoul(optarg, &end, 10);
+			if (*optarg == '\0' || *end != '\0' || baud == 0 || baud > 4000000) {
+				fprintf(stderr, "vehicle-sim: --baud: a line speed such as 115200\n");
+				return 2;
+			}
+			break;
+		}
+		case O_NODE:
+		case O_HZ: {
+			char *end;
+			unsigned long n = strtoul(optarg, &end, 10);
+			if (*optarg == '\0' || *end != '\0' || n > 100000) {
+				fprintf(stderr, "vehicle-sim: --%s: not a number\n",
+					o == O_NODE ? "node" : "status-hz");
+				return 2;
+			}
+			*(o == O_NODE ? &can_node : &can_hz) = n;
+			break;
+		}
 		default:
 			usage(stderr);
 			return 2;
@@ -240,7 +353,15 @@ int main(int argc, char **argv)
 		return 2;
 	}
 	if (realtime < 0)
-		realtime = isatty(STDIN_FILENO) ? 1 : 0;
+		realtime = isatty(STDIN_FILENO) || can_iface || pty ? 1 : 0;
+	if (can_iface && !realtime) {
+		fprintf(stderr, "vehicle-sim: --can needs --realtime\n");
+		return 2;
+	}
+	if (pty && !realtime) {
+		fprintf(stderr, "vehicle-sim: --pty needs --realtime\n");
+		return 2;
+	}
 
 	vs_config_t cfg;
 	char err[512];
@@ -268,6 +389,32 @@ int main(int argc, char **argv)
 	if (realtime)
 		sim_set_wait_fn(&a->sim, realtime_wait, a);
 
+	if (can_iface) {
+		if (sim_can_open(&a->can, &a->sim, can_iface, (unsigned)can_node, (unsigned)can_hz,
+				 err, sizeof(err)) < 0) {
+			fprintf(stderr, "vehicle-sim: %s\n", err);
+			return 1;
+		}
+		a->can_on = true;
+		fprintf(stderr, "vehicle-sim: CAN link on %s, node %lu, status %lu Hz\n", can_iface,
+			can_node, can_hz);
+	}
+
+	if (pty) {
+		char path[256];
+		vs_link_t io = {pty_read, pty_write, a};
+
+		if (pty_open(a, (unsigned)baud, path, sizeof(path)) < 0) {
+			fprintf(stderr, "vehicle-sim: --pty: %s\n", strerror(errno));
+			return 1;
+		}
+		link_init(&a->link, &a->sim.console, &io);
+		a->pty_on = true;
+		printf("%s\n", path);
+		fflush(stdout);
+		fprintf(stderr, "vehicle-sim: serial link on %s, %lu 8N1\n", path, baud);
+	}
+
 	trace_t trace;
 	if (trace_path) {
 		if (trace_open(&trace, trace_path, (uint32_t)trace_every) < 0) {
@@ -291,6 +438,8 @@ int main(int argc, char **argv)
 		config_path, io_path);
 
 	int rc = realtime ? run_realtime(a) : run_fast(a);
+	if (a->can_on)
+		sim_can_close(&a->can);
 
 	if (trace_path && trace_close(&trace) < 0) {
 		fprintf(stderr, "vehicle-sim: %s: write failed\n", trace_path);

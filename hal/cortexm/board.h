@@ -1,0 +1,34 @@
+/* The Cortex-M board: an ARM CMSDK APB UART (as on the ARM MPS2 boards and
+ * QEMU's mps2-an385/an386 machines) for the command link and the SysTick
+ * timer for the control tick. Addresses and clock are build-time constants
+ * (override with -D). */
+#ifndef BOARD_H
+#define BOARD_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "../link.h"
+
+#ifndef BOARD_CPU_HZ
+#define BOARD_CPU_HZ 25000000u /* MPS2 FPGA images run the core at 25 MHz */
+#endif
+#ifndef BOARD_UART_BASE
+#define BOARD_UART_BASE 0x40004000u /* CMSDK UART0 */
+#endif
+#ifndef BOARD_UART_BAUD
+#define BOARD_UART_BAUD 115200u
+#endif
+
+/* UART: init, and the command link over it (never blocks; transmit bytes
+ * wait in a ring and go out from uart_poll_tx). */
+void uart_init(void);
+void uart_poll_tx(void);
+extern const vs_link_t uart_link;
+
+/* SysTick: one interrupt per control period; the handler only counts. */
+void systick_init(uint32_t tick_hz);
+uint32_t systick_count(void);
+void SysTick_Handler(void);
+
+#endif

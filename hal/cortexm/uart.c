@@ -1,0 +1,59 @@
+/* Command link over the CMSDK APB UART, polled. Receive: whatever the data
+ * register holds when the main loop asks. Transmit: a ring drained while the
+ * transmitter has room, so a reply never stalls the control loop; when the
+ * ring is full the rest of a reply is refused and the link layer counts it. */
+#include "board.h"
+
+typedef struct {
+	volatile uint32_t data;
+	volatile uint32_t state; /* bit 0: TX full, bit 1: RX full */
+	volatile uint32_t ctrl;	 /* bit 0: TX enable, bit 1: RX enable */
+	volatile uint32_t intstatus;
+	volatile uint32_t bauddiv;
+} cmsdk_uart_t;
+
+#define UART	   ((cmsdk_uart_t *)BOARD_UART_BASE)
+#define ST_TX_FULL 1u
+#define ST_RX_FULL 2u
+
+#define TX_RING 1024u /* power of two; holds a whole console reply (CONSOLE_REPLY_MAX) */
+
+static uint8_t tx_ring[TX_RING];
+static uint32_t tx_head, tx_tail; /* free-running; head - tail = bytes queued */
+
+void uart_init(void)
+{
+	UART->bauddiv = BOARD_CPU_HZ / BOARD_UART_BAUD;
+	UART->ctrl = 3u;
+}
+
+void uart_poll_tx(void)
+{
+	while (tx_tail != tx_head && !(UART->state & ST_TX_FULL)) {
+		UART->data = tx_ring[tx_tail % TX_RING];
+		tx_tail++;
+	}
+}
+
+static size_t u_read(void *ctx, uint8_t *buf, size_t max)
+{
+	(void)ctx;
+	size_t n = 0;
+	while (n < max && (UART->state & ST_RX_FULL))
+		buf[n++] = (uint8_t)UART->data;
+	return n;
+}
+
+static size_t u_write(void *ctx, const uint8_t *buf, size_t len)
+{
+	(void)ctx;
+	size_t n = 0;
+	while (n < len && tx_head - tx_tail < TX_RING) {
+		tx_ring[tx_head % TX_RING] = buf[n++];
+		tx_head++;
+	}
+	uart_poll_tx();
+	return n;
+}
+
+const vs_link_t uart_link = {u_read, u_write, NULL};

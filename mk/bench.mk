@@ -1,0 +1,27 @@
+# Performance benchmarks (included from the top Makefile).
+#
+#   make bench              every figure of docs/performance.md: tick cost
+#                           (callgrind), accuracy against the double reference,
+#                           console/frame parse rates, 1 kHz loop lateness (60 s)
+#   make bench BENCH_QUICK=1  the same with a 5 s lateness run
+#
+# Built with the normal host flags (OPT, default -O2) into $(BUILD)/bench/.
+
+BENCH_DIR := $(BUILD)/bench
+BENCH_SECS := $(if $(filter 1,$(BENCH_QUICK)),5,60)
+BENCH_RIG := $(call objs,tools/bench/rig.c hal/cortexm/loop_hal.c)
+BENCH_PROGS := $(addprefix $(BENCH_DIR)/,tickcost accuracy parserate looplat)
+
+$(BENCH_DIR)/tickcost: $(call objs,tools/bench/tickcost.c) $(BENCH_RIG) $(FW_LIB)
+$(BENCH_DIR)/looplat: $(call objs,tools/bench/looplat.c) $(BENCH_RIG) $(FW_LIB)
+$(BENCH_DIR)/accuracy: $(call objs,tools/bench/accuracy.c tools/ref/ref_motion.c) $(BENCH_RIG) \
+	$(FW_LIB)
+$(BENCH_DIR)/parserate: $(call objs,tools/bench/parserate.c) $(BENCH_RIG) $(PROTO_LIB) $(HOST_LIB) \
+	$(FW_LIB)
+$(BENCH_PROGS):
+	@mkdir -p $(dir $@)
+	@$(if $(Q),echo "  LD      $@")
+	$(Q)$(CC) $(LDFLAGS) -o $@ $^ $(LDLIBS_HOST)
+
+bench: $(BENCH_PROGS)
+	$(Q)CC="$(CC)" OPT="$(OPT)" tools/bench/bench.sh $(BENCH_DIR) $(BENCH_SECS)

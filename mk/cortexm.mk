@@ -1,0 +1,107 @@
+# Cortex-M builds (included from the top Makefile).
+#
+#   make TARGET=cortex-m4   firmware/ and the link parsers of proto/ with
+#                           arm-none-eabi-gcc -Os: static libraries, a minimal
+#                           image (hal/cortexm), flash and RAM against budget
+#   make TARGET=cortex-m0   the same for ARMv6-M, and fails if the tick-path
+#                           objects reference any floating-point helper
+#   ARM_PREFIX=             toolchain prefix (default arm-none-eabi-)
+#
+# `make check` also runs the self-test of that floating-point check.
+
+ARM_PREFIX ?= arm-none-eabi-
+ARM_CC := $(ARM_PREFIX)gcc
+ARM_AR := $(ARM_PREFIX)ar
+ARM_NM := $(ARM_PREFIX)nm
+ARM_SIZE := $(ARM_PREFIX)size
+
+MCU_FLASH_BUDGET := 49152
+MCU_RAM_BUDGET := 12288
+
+MCU_CPU_cortex-m4 := -mcpu=cortex-m4 -mthumb -mfloat-abi=soft
+MCU_CPU_cortex-m0 := -mcpu=cortex-m0 -mthumb -mfloat-abi=soft
+
+# Boundary and initialisation code allowed to use doubles (see firmware/vs_api.c).
+FW_FLOAT_OK := firmware/vs_api.c firmware/config.c
+# The console and binary-frame parsers; the host client and CAN mapping stay on the host.
+MCU_PROTO_SRC := $(filter $(addprefix proto/,cmdtab.c console.c numparse.c wire.c frame.c link.c),$(PROTO_SRC))
+MCU_BOARD_SRC := $(addprefix hal/cortexm/,startup.c systick.c uart.c loop_hal.c board_main.c)
+
+.PHONY: cortexm nofloat-selftest
+
+ifneq ($(filter cortex-m4 cortex-m0,$(TARGET)),)
+.DEFAULT_GOAL := cortexm
+
+MCU := $(BUILD)/$(TARGET)
+MCU_BASE := -std=c11 -Os -g $(WARN) -I. -MMD -MP $(MCU_CPU_$(TARGET)) -ffunction-sections \
+	-fdata-sections
+MCU_CFLAGS_firmware := $(MCU_BASE) $(STRICT) -ffreestanding
+MCU_CFLAGS_proto := $(MCU_BASE) $(STRICT) $(HOST_DEFS)
+MCU_CFLAGS_hal := $(MCU_BASE) -ffreestanding
+mcu_objs = $(patsubst %.c,$(MCU)/obj/%.o,$(1))
+
+$(MCU)/obj/%.o: %.c
+	@mkdir -p $(dir $@)
+	@$(if $(Q),echo "  CC      $@")
+	$(Q)$(ARM_CC) $(MCU_CFLAGS_$(firstword $(subst /, ,$<))) $(EXTRA_CFLAGS) -c $< -o $@
+
+$(MCU)/libfirmware.a: $(call mcu_objs,$(FW_SRC))
+$(MCU)/libproto.a: $(call mcu_objs,$(MCU_PROTO_SRC))
+$(MCU)/libfirmware.a $(MCU)/libproto.a:
+	@$(if $(Q),echo "  AR      $@")
+	$(Q)rm -f $@ && $(ARM_AR) rcs $@ $^
+
+# newlib-nano; the console prints numbers with %f.
+$(MCU)/vehicle.elf: $(call mcu_objs,$(MCU_BOARD_SRC)) $(MCU)/libproto.a $(MCU)/libfirmware.a \
+		hal/cortexm/$(TARGET).ld
+	@$(if $(Q),echo "  LD      $@")
+	$(Q)$(ARM_CC) $(MCU_CPU_$(TARGET)) -Os -nostartfiles --specs=nano.specs -u _printf_float \
+		-Wl,--gc-sections -Wl,-Map=$(MCU)/vehicle.map -T hal/cortexm/$(TARGET).ld \
+		-o $@ $(filter %.o %.a,$^) -lm -lc -lnosys -lgcc
+
+# Tick path: every firmware object but the double boundary.
+MCU_TICK_OBJS := $(call mcu_objs,$(filter-out $(FW_FLOAT_OK),$(FW_SRC)))
+
+cortexm: $(MCU)/vehicle.elf $(MCU)/libfirmware.a $(MCU)/libproto.a
+	$(Q)echo "$(TARGET): $(MCU)/libfirmware.a $(MCU)/libproto.a $(MCU)/vehicle.elf" \
+		"($(ARM_CC) -Os, $(MCU_CPU_$(TARGET)))"
+	$(Q)$(ARM_SIZE) $(MCU)/vehicle.elf
+	$(Q)$(ARM_SIZE) -A $(MCU)/vehicle.elf | awk -v fb=$(MCU_FLASH_BUDGET) -v rb=$(MCU_RAM_BUDGET) ' \
+		$$1 == ".isr_vector" || $$1 == ".text" || $$1 == ".ARM.exidx" || $$1 == ".ARM.extab" { t += $$2 } \
+		$$1 == ".data" { d = $$2 } $$1 == ".bss" { b = $$2 } \
+		END { \
+			printf "flash (text+data): %d bytes = %.1f KiB (budget %.0f KiB: %s)\n", \
+				t + d, (t + d) / 1024, fb / 1024, t + d <= fb ? "met" : "OVER"; \
+			printf "static RAM (data+bss): %d bytes = %.1f KiB (budget %.0f KiB: %s);" \
+				" plus 4 KiB stack reserved, heap above bss\n", \
+				d + b, (d + b) / 1024, rb / 1024, d + b <= rb ? "met" : "OVER"; \
+		}'
+	$(Q)echo "by origin:"; awk -f hal/cortexm/mapsize.awk $(MCU)/vehicle.map | sort -k3 -n -r
+	$(Q)echo "largest RAM users:"; $(ARM_NM) -S --size-sort -t d $(MCU)/vehicle.elf | \
+		awk '$$3 ~ /[bBdD]/ { print }' | tail -5 | awk '{ printf "  %6d %s\n", $$2, $$4 }'
+ifeq ($(TARGET),cortex-m0)
+	$(Q)hal/cortexm/check_nofloat.sh $(ARM_NM) $(MCU_TICK_OBJS)
+	$(Q)echo "no floating point on the tick path: $(notdir $(MCU_TICK_OBJS)) reference no soft-float helper"
+endif
+
+-include $(shell find $(MCU)/obj -name '*.d' 2>/dev/null)
+endif
+
+# Self-test of the floating-point check: a double-using object must be
+# rejected, an object calling the integer helper __aeabi_ldivmod accepted.
+NOFLOAT_T := $(BUILD)/nofloat-selftest
+nofloat-selftest:
+	@mkdir -p $(NOFLOAT_T)
+	$(Q)$(ARM_CC) -mcpu=cortex-m0 -mthumb -Os -c hal/cortexm/nofloat_test/uses_float.c \
+		-o $(NOFLOAT_T)/uses_float.o
+	$(Q)$(ARM_CC) -mcpu=cortex-m0 -mthumb -Os -c hal/cortexm/nofloat_test/int_only.c \
+		-o $(NOFLOAT_T)/int_only.o
+	$(Q)if hal/cortexm/check_nofloat.sh $(ARM_NM) $(NOFLOAT_T)/uses_float.o >$(NOFLOAT_T)/out; then \
+		echo "nofloat self-test FAILED: a double multiply was not detected"; exit 1; fi
+	$(Q)grep -q '__aeabi_dmul' $(NOFLOAT_T)/out || \
+		{ echo "nofloat self-test FAILED: __aeabi_dmul not named"; cat $(NOFLOAT_T)/out; exit 1; }
+	$(Q)hal/cortexm/check_nofloat.sh $(ARM_NM) $(NOFLOAT_T)/int_only.o || \
+		{ echo "nofloat self-test FAILED: integer helper rejected"; exit 1; }
+	$(Q)echo "nofloat self-test: passed (double multiply detected, __aeabi_ldivmod accepted)"
+
+check: nofloat-selftest

@@ -1,0 +1,239 @@
+/* Frame codec, resynchronising receiver and the unit's frame server. */
+#include "frame.h"
+
+#include <string.h>
+
+size_t frame_encode(uint8_t *out, size_t cap, uint8_t seq, uint8_t op, const uint8_t *payload,
+		    size_t len)
+{
+	uint16_t crc;
+
+	if (len > 0xFFFFu || cap < FRAME_OVERHEAD || cap - FRAME_OVERHEAD < len)
+		return 0;
+	out[0] = FRAME_SYNC;
+	wire_put_u16(out + 1, (uint16_t)len);
+	out[3] = seq;
+	out[4] = op;
+	if (len)
+		memcpy(out + FRAME_HDR, payload, len);
+	crc = cmd_crc16(0xFFFF, out + 1, FRAME_HDR - 1 + len);
+	wire_put_u16(out + FRAME_HDR + len, crc);
+	return FRAME_OVERHEAD + len;
+}
+
+size_t frame_encode_response(uint8_t *out, size_t cap, uint8_t seq, uint8_t opcode, uint8_t status,
+			     const uint8_t *payload, size_t len)
+{
+	uint16_t crc;
+
+	if (len > 0xFFFEu || cap < FRAME_OVERHEAD + 1 || cap - FRAME_OVERHEAD - 1 < len)
+		return 0;
+	out[0] = FRAME_SYNC;
+	wire_put_u16(out + 1, (uint16_t)(len + 1));
+	out[3] = seq;
+	out[4] = (uint8_t)(opcode | FRAME_RESP_FLAG);
+	out[5] = status;
+	if (len)
+		memcpy(out + FRAME_HDR + 1, payload, len);
+	crc = cmd_crc16(0xFFFF, out + 1, FRAME_HDR + len);
+	wire_put_u16(out + FRAME_HDR + 1 + len, crc);
+	return FRAME_OVERHEAD + 1 + len;
+}
+
+void frame_rx_init(frame_rx_t *rx, uint8_t *buf, size_t max_payload, frame_fn on_frame,
+		   frame_other_fn on_other, void *ctx)
+{
+	memset(rx, 0, sizeof(*rx));
+	rx->buf = buf;
+	rx->max_payload = max_payload;
+	rx->cap = FRAME_OVERHEAD + max_payload;
+	rx->on_frame = on_frame;
+	rx->on_other = on_other;
+	rx->ctx = ctx;
+}
+
+static void report_bad(frame_rx_t *rx, const uint8_t *c, size_t avail, int status)
+{
+	frame_t f;
+
+	memset(&f, 0, sizeof(f));
+	f.status = status;
+	if (avail >= FRAME_HDR) {
+		f.header = true;
+		f.seq = c[3];
+		f.op = c[4];
+	}
+	rx->on_frame(rx->ctx, &f);
+}
+
+/* Works through buf from the front: bytes before a sync go out as other
+ * bytes, complete candidates are checked and reported. A failed candidate
+ * gives up only its sync byte, so the bytes after it are scanned again.
+ * flush: the link went quiet; an unfinished candidate is dropped too. */
+static void scan(frame_rx_t *rx, bool flush)
+{
+	size_t start = 0;
+
+	while (start < rx->n) {
+		const uint8_t *c = rx->buf + start;
+		size_t avail = rx->n - start, len, need;
+
+		if (c[0] != FRAME_SYNC) {
+			const uint8_t *s = memchr(c, FRAME_SYNC, avail);
+			size_t k = s ? (size_t)(s - c) : avail;
+
+			rx->st.other_bytes += (uint32_t)k;
+			if (rx->on_other)
+				rx->on_other(rx->ctx, c, k);
+			start += k;
+			continue;
+		}
+		if (avail >= 3) {
+			len = wire_get_u16(c + 1);
+			if (len > rx->max_payload) {
+				rx->st.oversize++;
+				report_bad(rx, c, avail, WIRE_ST_OVERSIZE);
+				start++;
+				continue;
+			}
+			need = FRAME_OVERHEAD + len;
+			if (avail >= need) {
+				uint16_t crc = cmd_crc16(0xFFFF, c + 1, FRAME_HDR - 1 + len);
+
+				if (crc != wire_get_u16(c + FRAME_HDR + len)) {
+					rx->st.crc_errors++;
+					report_bad(rx, c, avail, WIRE_ST_CRC);
+					start++;
+					continue;
+				}
+				{
+					frame_t f = {WIRE_ST_OK, true,		c[3], c[4],
+						     crc,	 c + FRAME_HDR, len};
+
+					rx->st.frames++;
+					rx->on_frame(rx->ctx, &f);
+				}
+				start += need;
+				continue;
+			}
+		}
+		/* An unfinished candidate. */
+		if (!flush)
+			break;
+		rx->st.truncated++;
+		start++;
+	}
+	if (start) {
+		memmove(rx->buf, rx->buf + start, rx->n - start);
+		rx->n -= start;
+	}
+}
+
+void frame_rx_feed(frame_rx_t *rx, const uint8_t *data, size_t n, uint32_t now_ms)
+{
+	size_t i = 0;
+
+	if (n)
+		rx->last_ms = now_ms;
+	while (i < n) {
+		if (rx->n == 0 && data[i] != FRAME_SYNC) {
+			/* Outside a frame: hand on the whole run up to the next sync. */
+			const uint8_t *s = memchr(data + i, FRAME_SYNC, n - i);
+			size_t k = s ? (size_t)(s - (data + i)) : n - i;
+
+			rx->st.other_bytes += (uint32_t)k;
+			if (rx->on_other)
+				rx->on_other(rx->ctx, data + i, k);
+			i += k;
+			continue;
+		}
+		/* Never full here: every candidate is complete or rejected by
+		 * the time it reaches cap bytes. */
+		rx->buf[rx->n++] = data[i++];
+		if (rx->n >= 3)
+			scan(rx, false);
+	}
+}
+
+void frame_rx_poll(frame_rx_t *rx, uint32_t now_ms)
+{
+	if (rx->n == 0 || (uint32_t)(now_ms - rx->last_ms) < FRAME_RX_TIMEOUT_MS)
+		return;
+	/* The head candidate is answered; what follows is rescanned, and any
+	 * further unfinished candidate in it is dropped with a count. */
+	rx->st.truncated++;
+	report_bad(rx, rx->buf, rx->n, WIRE_ST_TRUNCATED);
+	memmove(rx->buf, rx->buf + 1, rx->n - 1);
+	rx->n--;
+	scan(rx, true);
+}
+
+static void srv_nak(frame_srv_t *s, uint8_t seq, uint8_t op, int status)
+{
+	uint8_t out[FRAME_OVERHEAD + 1];
+	size_t n = frame_encode_response(out, sizeof(out), seq, op, (uint8_t)status, NULL, 0);
+
+	s->st.naks++;
+	if (s->write && n)
+		s->write(s->wctx, out, n);
+}
+
+static void srv_frame(void *ctx, const frame_t *f)
+{
+	frame_srv_t *s = ctx;
+	uint8_t resp[WIRE_RESP_MAX];
+	size_t n;
+	int st = WIRE_ST_OK;
+
+	if (f->status != WIRE_ST_OK) {
+		/* The opcode of a damaged frame cannot be trusted: answer with 0. */
+		srv_nak(s, f->header ? f->seq : 0, 0, f->status);
+		return;
+	}
+	if (f->op & FRAME_RESP_FLAG) {
+		/* A response travelling the wrong way (echo, loopback): not a
+		 * request, and answering it could ping-pong. */
+		s->st.naks++;
+		return;
+	}
+	if (s->have_last && f->seq == s->last_seq && f->op == s->last_op && f->crc == s->last_crc) {
+		s->st.duplicates++;
+		if (s->write)
+			s->write(s->wctx, s->last_resp, s->last_len);
+		return;
+	}
+	n = wire_dispatch(s->v, f->op, f->payload, f->len, resp, sizeof(resp), &st);
+	if (st != WIRE_ST_OK) {
+		srv_nak(s, f->seq, f->op, st);
+		return;
+	}
+	s->st.executed++;
+	s->last_len = frame_encode_response(s->last_resp, sizeof(s->last_resp), f->seq, f->op,
+					    WIRE_ST_OK, resp, n);
+	s->have_last = s->last_len > 0;
+	s->last_seq = f->seq;
+	s->last_op = f->op;
+	s->last_crc = f->crc;
+	if (s->write && s->last_len)
+		s->write(s->wctx, s->last_resp, s->last_len);
+}
+
+static void srv_other(void *ctx, const uint8_t *data, size_t n)
+{
+	frame_srv_t *s = ctx;
+
+	if (s->other)
+		s->other(s->octx, data, n);
+}
+
+void frame_srv_init(frame_srv_t *s, vehicle_t *v, frame_write_fn write, void *wctx,
+		    frame_other_fn on_other, void *octx)
+{
+	memset(s, 0, sizeof(*s));
+	s->v = v;
+	s->write = write;
+	s->wctx = wctx;
+	s->other = on_other;
+	s->octx = octx;
+	frame_rx_init(&s->rx, s->rxbuf, FRAME_REQ_PAYLOAD_MAX, srv_frame, srv_other, s);
+}

@@ -1,0 +1,360 @@
+/* Little-endian encoding of command-table arguments and the generic binary
+ * dispatcher (see wire.h for the layouts). */
+#include "wire.h"
+
+#include <string.h>
+
+static const char *const status_names[WIRE_ST_COUNT] = {
+    "ok", "crc", "oversize", "length", "opcode", "value", "truncated", "space",
+};
+
+const char *wire_status_name(int st)
+{
+	if (st < 0 || st >= WIRE_ST_COUNT)
+		return "unknown";
+	return status_names[st];
+}
+
+void wire_put_u16(uint8_t *p, uint16_t v)
+{
+	p[0] = (uint8_t)(v & 0xFFu);
+	p[1] = (uint8_t)(v >> 8);
+}
+
+void wire_put_u32(uint8_t *p, uint32_t v)
+{
+	for (int i = 0; i < 4; i++)
+		p[i] = (uint8_t)((v >> (8 * i)) & 0xFFu);
+}
+
+uint16_t wire_get_u16(const uint8_t *p)
+{
+	return (uint16_t)(p[0] | (unsigned)p[1] << 8);
+}
+
+uint32_t wire_get_u32(const uint8_t *p)
+{
+	return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+
+static void put_u64(uint8_t *p, uint64_t v)
+{
+	for (int i = 0; i < 8; i++)
+		p[i] = (uint8_t)((v >> (8 * i)) & 0xFFu);
+}
+
+static uint64_t get_u64(const uint8_t *p)
+{
+	uint64_t v = 0;
+
+	for (int i = 7; i >= 0; i--)
+		v = v << 8 | p[i];
+	return v;
+}
+
+/* Output cursor: every put checks room first, so a short buffer never gets
+ * a partial field. */
+typedef struct {
+	uint8_t *buf;
+	size_t cap, len;
+} wout_t;
+
+static bool room(const wout_t *o, size_t n)
+{
+	return o->cap - o->len >= n;
+}
+
+static int put_str(wout_t *o, const char *s, size_t max)
+{
+	size_t n = s ? strlen(s) : 0;
+
+	if (n > max)
+		return WIRE_ST_VALUE;
+	if (!room(o, 1 + n))
+		return WIRE_ST_SPACE;
+	o->buf[o->len++] = (uint8_t)n;
+	if (n)
+		memcpy(o->buf + o->len, s, n);
+	o->len += n;
+	return WIRE_ST_OK;
+}
+
+static int put_value(wout_t *o, char type, const cmd_value_t *v)
+{
+	uint64_t bits;
+
+	switch (type) {
+	case CMD_T_BOOL:
+		if (!room(o, 1))
+			return WIRE_ST_SPACE;
+		o->buf[o->len++] = v->b ? 1 : 0;
+		return WIRE_ST_OK;
+	case CMD_T_SHORT:
+		if (!room(o, 2))
+			return WIRE_ST_SPACE;
+		wire_put_u16(o->buf + o->len, (uint16_t)v->h);
+		o->len += 2;
+		return WIRE_ST_OK;
+	case CMD_T_ULONG:
+		if (!room(o, 4))
+			return WIRE_ST_SPACE;
+		wire_put_u32(o->buf + o->len, v->u);
+		o->len += 4;
+		return WIRE_ST_OK;
+	case CMD_T_DOUBLE:
+		if (!room(o, 8))
+			return WIRE_ST_SPACE;
+		memcpy(&bits, &v->d, sizeof(bits));
+		put_u64(o->buf + o->len, bits);
+		o->len += 8;
+		return WIRE_ST_OK;
+	case CMD_T_STRING:
+		return put_str(o, v->s, WIRE_STR_MAX);
+	case CMD_T_ALARMS: {
+		uint16_t n = v->alarms.n;
+
+		if (n > VS_ALARM_LIST_MAX || (n && !v->alarms.a))
+			return WIRE_ST_VALUE;
+		if (!room(o, 1))
+			return WIRE_ST_SPACE;
+		o->buf[o->len++] = (uint8_t)n;
+		for (uint16_t i = 0; i < n; i++) {
+			const vs_alarm_t *a = &v->alarms.a[i];
+			char src[VS_ALARM_SOURCE_MAX];
+			int st;
+
+			if (!room(o, 5))
+				return WIRE_ST_SPACE;
+			wire_put_u32(o->buf + o->len, a->code);
+			o->buf[o->len + 4] = a->type;
+			o->len += 5;
+			/* The unit's buffer may lack a terminator; never read past it. */
+			memcpy(src, a->source, sizeof(src));
+			src[sizeof(src) - 1] = '\0';
+			st = put_str(o, src, VS_ALARM_SOURCE_MAX - 1);
+			if (st != WIRE_ST_OK)
+				return st;
+		}
+		return WIRE_ST_OK;
+	}
+	default:
+		return WIRE_ST_VALUE;
+	}
+}
+
+int wire_encode(const char *types, unsigned n, const cmd_value_t v[], uint8_t *buf, size_t cap,
+		size_t *len)
+{
+	wout_t o = {buf, cap, 0};
+
+	for (unsigned i = 0; i < n; i++) {
+		int st = put_value(&o, types[i], &v[i]);
+
+		if (st != WIRE_ST_OK)
+			return st;
+	}
+	*len = o.len;
+	return WIRE_ST_OK;
+}
+
+typedef struct {
+	const uint8_t *buf;
+	size_t len, pos;
+} win_t;
+
+static bool avail(const win_t *in, size_t n)
+{
+	return in->len - in->pos >= n;
+}
+
+/* Copies a length-prefixed string into dst (room for max + 1). */
+static int get_str(win_t *in, char *dst, size_t max)
+{
+	size_t n;
+
+	if (!avail(in, 1))
+		return WIRE_ST_LENGTH;
+	n = in->buf[in->pos];
+	if (n > max)
+		return WIRE_ST_VALUE;
+	if (!avail(in, 1 + n))
+		return WIRE_ST_LENGTH;
+	if (memchr(in->buf + in->pos + 1, 0, n))
+		return WIRE_ST_VALUE;
+	memcpy(dst, in->buf + in->pos + 1, n);
+	dst[n] = '\0';
+	in->pos += 1 + n;
+	return WIRE_ST_OK;
+}
+
+static int get_value(win_t *in, char type, cmd_value_t *v, unsigned field, wire_store_t *st)
+{
+	uint64_t bits;
+
+	switch (type) {
+	case CMD_T_BOOL:
+		if (!avail(in, 1))
+			return WIRE_ST_LENGTH;
+		if (in->buf[in->pos] > 1)
+			return WIRE_ST_VALUE;
+		v->b = in->buf[in->pos++] == 1;
+		return WIRE_ST_OK;
+	case CMD_T_SHORT:
+		if (!avail(in, 2))
+			return WIRE_ST_LENGTH;
+		v->h = (int16_t)wire_get_u16(in->buf + in->pos);
+		in->pos += 2;
+		return WIRE_ST_OK;
+	case CMD_T_ULONG:
+		if (!avail(in, 4))
+			return WIRE_ST_LENGTH;
+		v->u = wire_get_u32(in->buf + in->pos);
+		in->pos += 4;
+		return WIRE_ST_OK;
+	case CMD_T_DOUBLE:
+		if (!avail(in, 8))
+			return WIRE_ST_LENGTH;
+		bits = get_u64(in->buf + in->pos);
+		memcpy(&v->d, &bits, sizeof(bits));
+		in->pos += 8;
+		return WIRE_ST_OK;
+	case CMD_T_STRING: {
+		int r = get_str(in, st->str[field], WIRE_STR_MAX);
+
+		v->s = st->str[field];
+		return r;
+	}
+	case CMD_T_ALARMS: {
+		uint8_t n;
+
+		if (!avail(in, 1))
+			return WIRE_ST_LENGTH;
+		n = in->buf[in->pos++];
+		if (n > VS_ALARM_LIST_MAX)
+			return WIRE_ST_VALUE;
+		v->alarms.a = st->alarms;
+		v->alarms.n = 0;
+		for (uint8_t i = 0; i < n; i++) {
+			vs_alarm_t *a = &st->alarms[i];
+			int r;
+
+			if (!avail(in, 5))
+				return WIRE_ST_LENGTH;
+			memset(a, 0, sizeof(*a));
+			a->code = wire_get_u32(in->buf + in->pos);
+			a->type = in->buf[in->pos + 4];
+			in->pos += 5;
+			r = get_str(in, a->source, VS_ALARM_SOURCE_MAX - 1);
+			if (r != WIRE_ST_OK)
+				return r;
+			v->alarms.n = (uint16_t)(i + 1);
+		}
+		return WIRE_ST_OK;
+	}
+	default:
+		return WIRE_ST_VALUE;
+	}
+}
+
+int wire_decode(const char *types, unsigned n, const uint8_t *buf, size_t len, cmd_value_t v[],
+		wire_store_t *st)
+{
+	win_t in = {buf, len, 0};
+
+	if (n > CMD_MAX_FIELDS)
+		return WIRE_ST_VALUE;
+	for (unsigned i = 0; i < n; i++) {
+		int r;
+
+		memset(&v[i], 0, sizeof(v[i]));
+		r = get_value(&in, types[i], &v[i], i, st);
+		if (r != WIRE_ST_OK)
+			return r;
+	}
+	return in.pos == len ? WIRE_ST_OK : WIRE_ST_LENGTH;
+}
+
+int wire_encode_request(const cmd_def_t *d, const cmd_value_t in[], uint8_t *buf, size_t cap,
+			size_t *len)
+{
+	return wire_encode(d->in_types, d->n_in, in, buf, cap, len);
+}
+
+int wire_decode_request(const cmd_def_t *d, const uint8_t *buf, size_t len, cmd_value_t in[],
+			wire_store_t *st)
+{
+	return wire_decode(d->in_types, d->n_in, buf, len, in, st);
+}
+
+int wire_encode_response(const cmd_def_t *d, bool result, const cmd_value_t out[], uint8_t *buf,
+			 size_t cap, size_t *len)
+{
+	size_t n = 0;
+	int st;
+
+	if (cap < 1)
+		return WIRE_ST_SPACE;
+	buf[0] = result ? 1 : 0;
+	st = wire_encode(d->out_types, d->n_out, out, buf + 1, cap - 1, &n);
+	if (st == WIRE_ST_OK)
+		*len = n + 1;
+	return st;
+}
+
+int wire_decode_response(const cmd_def_t *d, const uint8_t *buf, size_t len, bool *result,
+			 cmd_value_t out[], wire_store_t *st)
+{
+	if (len < 1)
+		return WIRE_ST_LENGTH;
+	if (buf[0] > 1)
+		return WIRE_ST_VALUE;
+	*result = buf[0] == 1;
+	return wire_decode(d->out_types, d->n_out, buf + 1, len - 1, out, st);
+}
+
+size_t wire_info(uint8_t *buf)
+{
+	buf[0] = CMD_PROTO_VERSION;
+	wire_put_u16(buf + 1, cmd_table_crc());
+	buf[3] = CMD_COUNT;
+	wire_put_u16(buf + 4, WIRE_REQ_MAX);
+	wire_put_u16(buf + 6, WIRE_RESP_MAX);
+	return WIRE_INFO_LEN;
+}
+
+size_t wire_dispatch(vehicle_t *v, unsigned opcode, const uint8_t *req, size_t len, uint8_t *resp,
+		     size_t cap, int *status)
+{
+	/* Static: the alarm and string buffers are too large for a small
+	 * firmware stack, and the dispatcher is never re-entered. */
+	static wire_store_t store;
+	static cmd_scratch_t scratch;
+	cmd_value_t in[CMD_MAX_FIELDS], out[CMD_MAX_FIELDS];
+	const cmd_def_t *d;
+	size_t n = 0;
+	bool r;
+
+	if (opcode == WIRE_OP_INFO) {
+		if (len != 0) {
+			*status = WIRE_ST_LENGTH;
+			return 0;
+		}
+		if (cap < WIRE_INFO_LEN) {
+			*status = WIRE_ST_SPACE;
+			return 0;
+		}
+		*status = WIRE_ST_OK;
+		return wire_info(resp);
+	}
+	d = cmd_by_opcode(opcode);
+	if (!d) {
+		*status = WIRE_ST_OPCODE;
+		return 0;
+	}
+	*status = wire_decode_request(d, req, len, in, &store);
+	if (*status != WIRE_ST_OK)
+		return 0;
+	r = cmd_invoke(v, d, in, out, &scratch);
+	*status = wire_encode_response(d, r, out, resp, cap, &n);
+	return *status == WIRE_ST_OK ? n : 0;
+}

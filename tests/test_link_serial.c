@@ -1,0 +1,670 @@
+/* The serial link end to end through a pseudo-terminal: console lines
+ * written raw as a serial terminal would, binary frames through the client
+ * library (frame and console transports), bad input of every kind, and
+ * vehiclectl against vehicle-sim --pty.
+ *
+ * The unit side runs in a thread: the link polled and the simulated plant
+ * ticked in lockstep (1 ms of simulated time per loop), so the tests never
+ * depend on wall-clock speed except for the frame inter-byte timeout.
+ */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include <cmocka.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <libgen.h>
+#include <math.h>
+#include <poll.h>
+#include <pthread.h>
+#include <pty.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "../host_sim/sim.h"
+#include "../proto/client.h"
+#include "../proto/link.h"
+
+static sim_t S;
+static link_t L;
+static int MASTER = -1, SLAVE = -1;
+static pthread_t TH;
+static pthread_mutex_t MU = PTHREAD_MUTEX_INITIALIZER;
+static volatile int RUN;
+static char BUILD_DIR[512] = "build";
+
+static uint32_t mono_ms(void)
+{
+	struct timespec ts;
+
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (uint32_t)((uint64_t)ts.tv_sec * 1000u + (uint64_t)ts.tv_nsec / 1000000u);
+}
+
+static size_t m_read(void *ctx, uint8_t *b, size_t n)
+{
+	ssize_t r = read(*(int *)ctx, b, n);
+
+	return r > 0 ? (size_t)r : 0;
+}
+
+static size_t m_write(void *ctx, const uint8_t *b, size_t n)
+{
+	ssize_t r = write(*(int *)ctx, b, n);
+
+	return r > 0 ? (size_t)r : 0;
+}
+
+static void *unit_thread(void *arg)
+{
+	(void)arg;
+	while (RUN) {
+		pthread_mutex_lock(&MU);
+		link_poll(&L, mono_ms());
+		sim_tick(&S);
+		pthread_mutex_unlock(&MU);
+		usleep(100);
+	}
+	return NULL;
+}
+
+static int setup(void **state)
+{
+	vs_config_t cfg;
+	plant_params_t pp;
+	vs_link_t io = {m_read, m_write, &MASTER};
+
+	(void)state;
+	vs_config_defaults(&cfg);
+	/* 1/32 mm per count: straight targets land on whole counts */
+	cfg.wheel_diameter_mm = 16384.0 / (32.0 * 3.14159265358979323846);
+	plant_params_default(&pp);
+	if (sim_init(&S, &cfg, &pp) != 0)
+		return -1;
+	if (openpty(&MASTER, &SLAVE, NULL, NULL, NULL) != 0)
+		return -1;
+	if (vc_tty_set_raw(SLAVE, 115200) != 0 || vc_tty_set_raw(MASTER, 0) != 0)
+		return -1;
+	fcntl(MASTER, F_SETFL, fcntl(MASTER, F_GETFL) | O_NONBLOCK);
+	link_init(&L, &S.console, &io);
+	RUN = 1;
+	return pthread_create(&TH, NULL, unit_thread, NULL) == 0 ? 0 : -1;
+}
+
+static int teardown(void **state)
+{
+	(void)state;
+	RUN = 0;
+	pthread_join(TH, NULL);
+	close(SLAVE);
+	close(MASTER);
+	return 0;
+}
+
+/* Host side, raw as a serial terminal. */
+static void host_write(const void *p, size_t n)
+{
+	const uint8_t *b = p;
+
+	while (n) {
+		ssize_t k = write(SLAVE, b, n);
+
+		if (k < 0 && errno == EINTR)
+			continue;
+		assert_true(k > 0);
+		b += k;
+		n -= (size_t)k;
+	}
+}
+
+/* Discards everything the unit sent so far. */
+static void host_drain(void)
+{
+	uint8_t junk[4096];
+	struct pollfd pf = {SLAVE, POLLIN, 0};
+
+	while (poll(&pf, 1, 50) > 0 && read(SLAVE, junk, sizeof(junk)) > 0)
+		;
+}
+
+/* One reply line (without its "\n"), skipping binary answers. */
+static const char *host_line(void)
+{
+	static char line[2048];
+	size_t n = 0;
+	uint32_t end = mono_ms() + 2000;
+
+	for (;;) {
+		struct pollfd pf = {SLAVE, POLLIN, 0};
+		char c;
+
+		assert_true(mono_ms() < end);
+		if (poll(&pf, 1, 100) <= 0)
+			continue;
+		if (read(SLAVE, &c, 1) != 1)
+			continue;
+		if (c == '\n') {
+			line[n] = '\0';
+			return line;
+		}
+		if (n < sizeof(line) - 1)
+			line[n++] = c;
+	}
+}
+
+static const char *con(const char *cmd)
+{
+	char buf[512];
+	int n = snprintf(buf, sizeof(buf), "%s\r\n", cmd);
+
+	host_write(buf, (size_t)n);
+	return host_line();
+}
+
+#define CON(cmd, reply) assert_string_equal(con(cmd), reply)
+
+/* Lets the plant settle: ms of simulated time. */
+static void wait_sim_ms(unsigned ms)
+{
+	uint64_t t0, t;
+
+	pthread_mutex_lock(&MU);
+	t0 = S.now_us;
+	pthread_mutex_unlock(&MU);
+	do {
+		usleep(2000);
+		pthread_mutex_lock(&MU);
+		t = S.now_us;
+		pthread_mutex_unlock(&MU);
+	} while (t - t0 < (uint64_t)ms * 1000u);
+}
+
+static void wait_idle_console(void)
+{
+	for (int i = 0; i < 400; i++) {
+		/* Ready, or Warning-### after a refused command: idle either way */
+		if (strncmp(con("getState"), "ok true 17 ", 11) != 0) {
+			wait_sim_ms(1000);
+			return;
+		}
+		usleep(10000);
+	}
+	fail_msg("unit never became Ready");
+}
+
+static void test_console_raw(void **state)
+{
+	(void)state;
+	host_drain();
+	CON("getVersion", "ok true \"Ver.1.0.0\"");
+	CON("getIFVersion", "ok true \"RTC VehicleService interface: ver.2.0.0\"");
+	/* bare CR and bare LF end lines as well */
+	host_write("getState\r", 9);
+	assert_string_equal(host_line(), "ok true 25 \"Unpowered\"");
+	host_write("\ngetState\n", 10);
+	assert_string_equal(host_line(), "ok true 25 \"Unpowered\"");
+	CON("nosuchop 1", "error 1 unknown operation nosuchop");
+	CON("setPower true", "ok true");
+	CON("setServo true", "ok true");
+	CON("getState", "ok true 16 \"Ready\"");
+	CON("moveForward 500", "ok true");
+	CON("moveForward 500", "ok false");
+	wait_idle_console();
+	CON("getPosition", "ok true 500.000 0.000 0.000");
+	CON("getActiveAlarm 1", "ok true 1 1 120 warning \"moveForward refused: unit not ready\"");
+}
+
+static vc_client_t C;
+
+static void wait_idle_client(void)
+{
+	for (int i = 0; i < 400; i++) {
+		int16_t st = 0;
+		char msg[VS_STATE_MSG_MAX];
+		bool r = false;
+
+		assert_int_equal(vc_getState(&C, &r, &st, msg), VC_OK);
+		if (st != VS_STATE_BUSY) {
+			wait_sim_ms(1000);
+			return;
+		}
+		usleep(10000);
+	}
+	fail_msg("unit never became Ready");
+}
+
+static void client_session(bool console)
+{
+	const char *s = NULL;
+	bool r = false, servo = false;
+	int16_t st = 0, nact = 0;
+	char msg[VS_STATE_MSG_MAX];
+	vs_position_t pos;
+	vs_alarm_t al[4];
+	uint16_t len = 99;
+	unsigned ver = 0, ops = 0;
+	uint16_t crc = 0;
+	double a = 0, b = 0;
+
+	host_drain();
+	assert_int_equal(console ? vc_attach_console_fd(&C, SLAVE, false)
+				 : vc_attach_serial_fd(&C, SLAVE, false),
+			 VC_OK);
+	assert_int_equal(vc_info(&C, &ver, &crc, &ops), VC_OK);
+	assert_int_equal(ver, CMD_PROTO_VERSION);
+	assert_int_equal(crc, cmd_table_crc());
+	assert_int_equal(ops, 34);
+	assert_int_equal(vc_getIFVersion(&C, &r, &s), VC_OK);
+	assert_true(r);
+	assert_string_equal(s, "RTC VehicleService interface: ver.2.0.0");
+	assert_int_equal(vc_getState(&C, &r, &st, msg), VC_OK);
+	assert_int_equal(st, VS_STATE_UNPOWERED);
+	assert_string_equal(msg, "Unpowered");
+	assert_int_equal(vc_getVelocityLimit(&C, &r, &a, &b), VC_OK);
+	assert_true(r);
+	assert_true(a > 0 && b > 0);
+	/* refused: servo without power */
+	assert_int_equal(vc_setServo(&C, &r, true), VC_OK);
+	assert_false(r);
+	assert_int_equal(vc_getActiveAlarm(&C, &r, 4, &nact, al, &len), VC_OK);
+	assert_true(r);
+	assert_int_equal(nact, 1);
+	assert_int_equal(len, 1);
+	assert_int_equal(al[0].code, ALM_W_POWER_OFF);
+	assert_int_equal(al[0].type, VS_ALARM_WARNING);
+	assert_int_equal(vc_clearAlarm(&C, &r), VC_OK);
+	assert_int_equal(vc_setPower(&C, &r, true), VC_OK);
+	assert_true(r);
+	assert_int_equal(vc_setServo(&C, &r, true), VC_OK);
+	assert_true(r);
+	assert_int_equal(vc_getServoStatus(&C, &r, 0, &servo), VC_OK);
+	assert_true(r);
+	assert_true(servo);
+	assert_int_equal(vc_moveForward(&C, &r, 500), VC_OK);
+	assert_true(r);
+	wait_idle_client();
+	assert_int_equal(vc_getPosition(&C, &r, &pos), VC_OK);
+	assert_true(r);
+	assert_true(fabs(pos.x - 500.0) < 0.0005);
+	assert_true(fabs(pos.y) < 0.0005);
+	assert_true(fabs(pos.theta) < 0.0005);
+	vc_close(&C);
+}
+
+static void test_binary_client(void **state)
+{
+	(void)state;
+	client_session(false);
+	assert_true(L.fs.st.executed >= 14);
+	assert_int_equal(L.fs.st.naks, 0);
+}
+
+static void test_console_client(void **state)
+{
+	(void)state;
+	client_session(true);
+	assert_int_equal(L.fs.st.executed, 0);
+}
+
+/* The same frame twice: answered twice, run once. */
+static void test_retransmission_runs_once(void **state)
+{
+	uint8_t on = 1, f[FRAME_REQ_MAX], pay[8], a1[64], a2[64];
+	cmd_value_t v[1];
+	size_t n, len;
+
+	(void)state;
+	host_drain();
+	assert_int_equal(vc_attach_serial_fd(&C, SLAVE, false), VC_OK);
+	assert_int_equal(vc_setPower(&C, NULL, true), VC_OK);
+	assert_int_equal(vc_setServo(&C, NULL, true), VC_OK);
+	vc_close(&C);
+	(void)on;
+	v[0].d = 300;
+	assert_int_equal(
+	    wire_encode_request(cmd_by_opcode(CMD_OP_moveForward), v, pay, sizeof(pay), &len),
+	    WIRE_ST_OK);
+	n = frame_encode(f, sizeof(f), 0x42, CMD_OP_moveForward, pay, len);
+	pthread_mutex_lock(&MU);
+	uint32_t ex0 = L.fs.st.executed, dup0 = L.fs.st.duplicates;
+	pthread_mutex_unlock(&MU);
+	host_drain();
+	host_write(f, n);
+	usleep(100000);
+	assert_int_equal(read(SLAVE, a1, sizeof(a1)), 9);
+	host_write(f, n);
+	usleep(100000);
+	assert_int_equal(read(SLAVE, a2, sizeof(a2)), 9);
+	assert_memory_equal(a1, a2, 9);
+	assert_int_equal(a1[5], WIRE_ST_OK);
+	assert_int_equal(a1[6], 1); /* true: the one run was accepted */
+	pthread_mutex_lock(&MU);
+	assert_int_equal(L.fs.st.executed, ex0 + 1);
+	assert_int_equal(L.fs.st.duplicates, dup0 + 1);
+	pthread_mutex_unlock(&MU);
+	assert_int_equal(vc_attach_serial_fd(&C, SLAVE, false), VC_OK);
+	wait_idle_client();
+	{
+		vs_position_t p;
+
+		assert_int_equal(vc_getPosition(&C, NULL, &p), VC_OK);
+		assert_true(fabs(p.x - 300.0) < 0.0005); /* once, not 600 */
+	}
+	vc_close(&C);
+}
+
+static void put_frame(uint8_t seq, uint8_t op, const void *p, size_t n)
+{
+	uint8_t f[FRAME_RESP_MAX];
+	size_t k = frame_encode(f, sizeof(f), seq, op, p, n);
+
+	assert_int_not_equal(k, 0);
+	host_write(f, k);
+}
+
+/* Bad input of every kind while a move waits in the queue (paused): every
+ * piece is NAKed, rejected or dropped with a count, nothing runs, nothing
+ * moves, the queued move survives and the link answers afterwards. */
+static void test_bad_input(void **state)
+{
+	static uint8_t junk[65536];
+	uint8_t f[FRAME_RESP_MAX];
+	vs_diag_t d0, d1;
+	frame_rx_stats_t r0, r1;
+	uint32_t ex0, ex1;
+	bool r = false;
+	int16_t st = 0;
+	char msg[VS_STATE_MSG_MAX];
+	vs_position_t pos;
+
+	(void)state;
+	host_drain();
+	CON("setPower true", "ok true");
+	CON("setServo true", "ok true");
+	CON("pause", "ok true");
+	CON("moveLinearAbs 300 0 0", "ok true");
+	CON("getState", "ok true 21 \"Paused\"");
+	pthread_mutex_lock(&MU);
+	vehicle_diag(&S.vehicle, &d0);
+	r0 = L.fs.rx.st;
+	ex0 = L.fs.st.executed;
+	pthread_mutex_unlock(&MU);
+	assert_int_equal(d0.queue_len, 1);
+
+	/* random bytes */
+	srand(4242);
+	for (size_t i = 0; i < 8192; i++)
+		junk[i] = (uint8_t)rand();
+	host_write(junk, 8192);
+	usleep(150000);
+	/* bad CRC */
+	{
+		size_t k = frame_encode(f, sizeof(f), 1, CMD_OP_moveForward,
+					(const uint8_t *)"\0\0\0\0\0\x40\x7f\x40", 8);
+
+		f[k - 2] ^= 0xFF;
+		host_write(f, k);
+	}
+	/* wrong lengths: 7 and 9 bytes for one double; a getPosition with a payload */
+	put_frame(2, CMD_OP_moveForward, "\0\0\0\0\0\x40\x7f", 7);
+	put_frame(3, CMD_OP_moveForward, "\0\0\0\0\0\x40\x7f\x40\0", 9);
+	put_frame(4, CMD_OP_getPosition, "\0", 1);
+	/* unknown opcodes, a bad boolean, an answer frame */
+	put_frame(5, 0x55, NULL, 0);
+	put_frame(6, 0, NULL, 0);
+	put_frame(7, CMD_OP_setServo, "\x02", 1);
+	put_frame(8, 0x80 | CMD_OP_resume, "\0\x01", 2);
+	/* oversize: declared 65 and 1000 */
+	memset(junk, 0, 1100);
+	put_frame(9, CMD_OP_resume, junk, 65);
+	put_frame(10, CMD_OP_resume, junk, 1000);
+	/* truncated: header and half a payload, then silence */
+	{
+		size_t k = frame_encode(f, sizeof(f), 11, CMD_OP_moveForward,
+					(const uint8_t *)"\0\0\0\0\0\x40\x7f\x40", 8);
+
+		host_write(f, k - 5);
+		usleep(250000);
+	}
+	/* a flood at full rate: 64 KiB of sync-rich garbage with no line end */
+	for (size_t i = 0; i < sizeof(junk); i++)
+		junk[i] = (uint8_t)(i % 5 == 0 ? FRAME_SYNC : rand());
+	host_write(junk, sizeof(junk));
+	usleep(250000);
+	/* a line end closes whatever the console collected */
+	host_write("\n", 1);
+	usleep(50000);
+	host_drain();
+
+	pthread_mutex_lock(&MU);
+	vehicle_diag(&S.vehicle, &d1);
+	r1 = L.fs.rx.st;
+	ex1 = L.fs.st.executed;
+	pthread_mutex_unlock(&MU);
+	assert_int_equal(ex1, ex0); /* nothing ran */
+	assert_int_equal(d1.queue_len, 1);
+	assert_memory_equal(&d1.odom_pose, &d0.odom_pose, sizeof(d0.odom_pose));
+	assert_true(r1.crc_errors > r0.crc_errors);
+	assert_true(r1.oversize >= r0.oversize + 2);
+	assert_true(r1.truncated > r0.truncated);
+	assert_true(r1.other_bytes > r0.other_bytes);
+	assert_true(L.fs.st.naks >= 8);
+
+	/* resynchronised: both protocols answer at once */
+	CON("getState", "ok true 21 \"Paused\"");
+	assert_int_equal(vc_attach_serial_fd(&C, SLAVE, false), VC_OK);
+	assert_int_equal(vc_getState(&C, &r, &st, msg), VC_OK);
+	assert_int_equal(st, VS_STATE_PAUSED);
+	/* and the queued move is still there */
+	assert_int_equal(vc_resume(&C, &r), VC_OK);
+	assert_true(r);
+	wait_idle_client();
+	assert_int_equal(vc_getPosition(&C, &r, &pos), VC_OK);
+	assert_true(fabs(pos.x - 300.0) < 0.0005);
+	vc_close(&C);
+}
+
+/* Client-side failures: a silent unit is a timeout with retries, not a hang. */
+static void test_client_timeout(void **state)
+{
+	int fds[2];
+	bool r;
+
+	(void)state;
+	assert_int_equal(pipe(fds), 0);
+	/* write end discards into a pipe nobody answers on */
+	{
+		int m, s;
+
+		assert_int_equal(openpty(&m, &s, NULL, NULL, NULL), 0);
+		assert_int_equal(vc_tty_set_raw(s, 115200), 0);
+		assert_int_equal(vc_attach_serial_fd(&C, s, true), VC_OK);
+		C.timeout_ms = 50;
+		C.retries = 2;
+		assert_int_equal(vc_stop(&C, &r), VC_E_TIMEOUT);
+		/* info handshake (1 attempt) + 3 attempts of stop */
+		assert_int_equal(C.stats.retries, 2);
+		assert_int_equal(C.stats.timeouts, 4);
+		{
+			/* the retries repeated the same sequence number */
+			uint8_t b[256];
+			ssize_t k = read(m, b, sizeof(b));
+
+			assert_int_equal(k, 4 * 7);
+			assert_int_equal(b[7 + 4], CMD_OP_stop);
+			assert_memory_equal(b + 7, b + 14, 7);
+			assert_memory_equal(b + 7, b + 21, 7);
+		}
+		vc_close(&C);
+		close(m);
+	}
+	close(fds[0]);
+	close(fds[1]);
+}
+
+/* vehiclectl against vehicle-sim --pty, as a user would. */
+static pid_t SIM_PID;
+static char PTY_PATH[256];
+
+static void start_sim(void)
+{
+	int p[2];
+	char exe[600];
+	FILE *f;
+
+	snprintf(exe, sizeof(exe), "%s/vehicle-sim", BUILD_DIR);
+	assert_int_equal(pipe(p), 0);
+	SIM_PID = fork();
+	assert_true(SIM_PID >= 0);
+	if (SIM_PID == 0) {
+		dup2(p[1], 1);
+		close(p[0]);
+		execl(exe, exe, "--pty", "--config", "config/vehicle.xml", "--io", "config/io.xml",
+		      (char *)NULL);
+		_exit(127);
+	}
+	close(p[1]);
+	f = fdopen(p[0], "r");
+	assert_non_null(f);
+	assert_non_null(fgets(PTY_PATH, sizeof(PTY_PATH), f));
+	PTY_PATH[strcspn(PTY_PATH, "\n")] = '\0';
+	assert_memory_equal(PTY_PATH, "/dev/", 5);
+	fclose(f);
+}
+
+static void stop_sim(void)
+{
+	int status = 0;
+
+	kill(SIM_PID, SIGTERM);
+	waitpid(SIM_PID, &status, 0);
+	assert_true(WIFEXITED(status));
+	assert_int_equal(WEXITSTATUS(status), 0);
+}
+
+/* Runs vehiclectl; returns its exit status, output in out. */
+static int ctl(char *out, size_t cap, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+static int ctl(char *out, size_t cap, const char *fmt, ...)
+{
+	char args[512], cmd[1200];
+	va_list ap;
+	FILE *f;
+	size_t n;
+	int st;
+
+	va_start(ap, fmt);
+	vsnprintf(args, sizeof(args), fmt, ap);
+	va_end(ap);
+	snprintf(cmd, sizeof(cmd), "%s/vehiclectl %s 2>&1", BUILD_DIR, args);
+	f = popen(cmd, "r");
+	assert_non_null(f);
+	n = fread(out, 1, cap - 1, f);
+	out[n] = '\0';
+	st = pclose(f);
+	return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+
+static void test_vehiclectl(void **state)
+{
+	static char out[16384];
+	unsigned lines = 0;
+	FILE *f;
+	char row[512];
+
+	(void)state;
+	assert_int_equal(ctl(out, sizeof(out), "help"), 0);
+	for (char *p = out; (p = strstr(p, "\n    ")) != NULL; p++)
+		lines++;
+	assert_int_equal(lines, CMD_COUNT);
+	assert_non_null(strstr(out, " 9 getPosition -> x:double y:double theta:double\n"));
+	assert_non_null(strstr(out, "17 moveForward <x_:double>\n"));
+
+	start_sim();
+	assert_int_equal(ctl(out, sizeof(out), "--port %s getVersion", PTY_PATH), 0);
+	assert_string_equal(out, "true ver=\"Ver.1.0.0\"\n");
+	assert_int_equal(ctl(out, sizeof(out), "--port %s --json getState", PTY_PATH), 0);
+	assert_string_equal(
+	    out, "{\"op\":\"getState\",\"result\":true,\"state\":25,\"Msg\":\"Unpowered\"}\n");
+	/* refused: exit 1, the answer still printed */
+	assert_int_equal(ctl(out, sizeof(out), "--port %s moveForward 500", PTY_PATH), 1);
+	assert_string_equal(out, "false\n");
+	assert_int_equal(ctl(out, sizeof(out), "--port %s --console getState", PTY_PATH), 0);
+	assert_string_equal(out, "true state=25 Msg=\"Unpowered\"\n");
+	assert_int_equal(ctl(out, sizeof(out), "--port %s setPower true", PTY_PATH), 0);
+	assert_int_equal(ctl(out, sizeof(out), "--port %s setservo on", PTY_PATH), 0);
+	assert_int_equal(ctl(out, sizeof(out), "--port %s moveTurn -90", PTY_PATH), 0);
+	/* usage errors: exit 2 */
+	assert_int_equal(ctl(out, sizeof(out), "--port %s moveForward", PTY_PATH), 2);
+	assert_int_equal(ctl(out, sizeof(out), "--port %s moveForward abc", PTY_PATH), 2);
+	assert_int_equal(ctl(out, sizeof(out), "--port %s nosuchop", PTY_PATH), 2);
+	/* link failure: exit 3 */
+	assert_int_equal(ctl(out, sizeof(out), "--port /dev/nonexistent-tty getState"), 3);
+	assert_int_equal(ctl(out, sizeof(out), "--port %s info", PTY_PATH), 0);
+	assert_non_null(strstr(out, "matches"));
+	assert_int_equal(
+	    ctl(out, sizeof(out), "--port %s --json watch --count 3 --interval 50", PTY_PATH), 0);
+	lines = 0;
+	for (char *p = out; (p = strstr(p, "{\"t\":")) != NULL; p++)
+		lines++;
+	assert_int_equal(lines, 3);
+	assert_non_null(strstr(out, "\"battery\":"));
+	assert_int_equal(
+	    ctl(out, sizeof(out),
+		"--port %s record /tmp/vehiclectl_test_%d.csv --duration 0.3 --interval 100",
+		PTY_PATH, (int)getpid()),
+	    0);
+	snprintf(row, sizeof(row), "/tmp/vehiclectl_test_%d.csv", (int)getpid());
+	f = fopen(row, "r");
+	assert_non_null(f);
+	assert_non_null(fgets(row, sizeof(row), f));
+	assert_string_equal(row, "t_s,state,msg,x_mm,y_mm,theta_deg,speed_mm_s,speed_deg_s,"
+				 "battery_0_1V,alarms,newest_alarm\n");
+	lines = 0;
+	while (fgets(row, sizeof(row), f))
+		lines++;
+	fclose(f);
+	snprintf(row, sizeof(row), "/tmp/vehiclectl_test_%d.csv", (int)getpid());
+	unlink(row);
+	assert_true(lines >= 3 && lines <= 5);
+	/* the turn finished: the pose reads back */
+	usleep(1500000);
+	assert_int_equal(ctl(out, sizeof(out), "--port %s getPosition", PTY_PATH), 0);
+	{
+		double x = 1, y = 1, th = 0;
+
+		assert_int_equal(sscanf(out, "true x=%lf y=%lf theta=%lf", &x, &y, &th), 3);
+		assert_true(fabs(x) < 0.5 && fabs(y) < 0.5);
+		assert_true(fabs(th + 90.0) < 0.05);
+	}
+	stop_sim();
+}
+
+int main(int argc, char **argv)
+{
+	const struct CMUnitTest tests[] = {
+	    cmocka_unit_test_setup_teardown(test_console_raw, setup, teardown),
+	    cmocka_unit_test_setup_teardown(test_binary_client, setup, teardown),
+	    cmocka_unit_test_setup_teardown(test_console_client, setup, teardown),
+	    cmocka_unit_test_setup_teardown(test_retransmission_runs_once, setup, teardown),
+	    cmocka_unit_test_setup_teardown(test_bad_input, setup, teardown),
+	    cmocka_unit_test(test_client_timeout),
+	    cmocka_unit_test(test_vehiclectl),
+	};
+
+	if (argc > 0) {
+		char tmp[512];
+
+		/* BUILD/tests/test_link_serial -> BUILD */
+		snprintf(tmp, sizeof(tmp), "%s", argv[0]);
+		snprintf(BUILD_DIR, sizeof(BUILD_DIR), "%s", dirname(dirname(tmp)));
+	}
+	signal(SIGPIPE, SIG_IGN);
+	return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,45 @@
+#!/bin/sh
+# make bench: every performance figure with what was measured and how.
+#   tools/bench/bench.sh BENCH_DIR LOOP_SECONDS
+set -eu
+dir=$1; secs=$2
+here=$(dirname "$0")
+cpu=$(sed -n 's/^model name[^:]*: //p' /proc/cpuinfo 2>/dev/null | head -1)
+cc_ver=$(${CC:-cc} --version 2>/dev/null | head -1)
+echo "vehicle unit benchmarks"
+echo "  machine: ${cpu:-unknown} ($(nproc) CPUs), $(uname -sr)"
+echo "  compiler: $cc_ver, ${OPT:-?} (the Makefile's OPT); $(valgrind --version 2>/dev/null || echo 'valgrind missing')"
+echo "  unit: reference configuration (firmware/config.c: differential, 1 kHz, 500 mm/s, 90 deg/s,"
+echo "        500 mm/s^2, 180 deg/s^2, blend 200 mm) on the loopback plant (hal/cortexm/loop_hal.c)"
+echo
+
+echo "== 1. control tick cost: instructions per whole vehicle_tick (callgrind Ir, one dump per tick) =="
+echo "  retarget: 20 moveContinuousRel calls while moving; 'cmd' is the call, 'tick-after-cmd' the tick"
+echo "  that replans toward the new goal"
+"$here/tickcost.sh" "$dir/tickcost" | tee "$dir/tickcost.txt"
+awk '
+	$1 == "cruise" && $2 == "tick" { printf "  target: <= 1000 per whole tick in the blended cruise: mean %s, max %s -> %s\n", $6, $12, ($12 <= 1000 ? "met" : ($6 <= 1000 ? "met on average only" : "missed")) }
+	$1 == "retarget" && $2 == "cmd" { c = $12 }
+	$1 == "retarget" && $2 == "tick-after-cmd" { t = $12 }
+	END { if (t != "") printf "  target: <= 5000 for the retarget tick (call + tick, worst): %d -> %s\n", c + t, (c + t <= 5000 ? "met" : "missed") }' "$dir/tickcost.txt"
+echo
+
+echo "== 2. trajectory accuracy: fixed-point engine (motion_tick, perfect plant) vs double reference (tools/ref) =="
+"$here/accuracy.sh" "$dir/accuracy" | tee "$dir/accuracy.txt"
+awk '
+	/^[a-z]+: / { m = $1; sub(":", "", m) }
+	/endpoint: engine - reference/ { e[m] = $5; et[m] = $7 }
+	/largest path deviation/ { dv[m] = $4 }
+	END {
+		printf "  target: line endpoint <= 0.01 mm: %s mm -> %s\n", e["line"], (e["line"] + 0 <= 0.01 ? "met" : "missed")
+		printf "  target: turn endpoint <= 0.001 deg: %s deg -> %s\n", et["turn"], (et["turn"] + 0 <= 0.001 ? "met" : "missed")
+		printf "  target: cruise path deviation <= 0.1 mm: %s mm -> %s\n", dv["cruise"], (dv["cruise"] + 0 <= 0.1 ? "met" : "missed")
+	}' "$dir/accuracy.txt"
+echo
+
+echo "== 3. parse rates (wall clock, this machine, one core) =="
+"$dir/parserate"
+echo
+
+echo "== 4. 1 kHz loop lateness on Linux (clock_nanosleep TIMER_ABSTIME, vehicle_tick on the cruise route) =="
+"$dir/looplat" "$secs"

@@ -1,0 +1,556 @@
+/* vehiclectl: drive a vehicle unit (or vehicle-sim) from a shell.
+ *
+ *   vehiclectl --port /dev/ttyUSB0 moveForward 500
+ *   vehiclectl --can can0 getPosition
+ *   vehiclectl --port /dev/pts/3 --json watch --count 5
+ *
+ * Every operation of the command table is a command; its arguments follow
+ * the console's rules (numbers, true/false/on/off/1/0). Exit status: 0 the
+ * operation returned true, 1 it returned false, 2 usage, 3 link failure.
+ */
+#include <errno.h>
+#include <getopt.h>
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "../proto/client.h"
+#include "../proto/cmdtab.h"
+#include "../proto/numparse.h"
+
+static volatile sig_atomic_t stop_requested;
+
+static void on_signal(int sig)
+{
+	(void)sig;
+	stop_requested = 1;
+}
+
+static void usage(FILE *f)
+{
+	fputs("usage: vehiclectl LINK [options] COMMAND [ARGS...]\n"
+	      "links:\n"
+	      "  --port DEV      serial port, binary frames (docs/protocol.md)\n"
+	      "  --baud N        line speed (default 115200)\n"
+	      "  --console       speak the text console on the port instead of frames\n"
+	      "  --can IFACE     SocketCAN interface (docs/can.md)\n"
+	      "  --node N        CAN node id of the unit (default 1)\n"
+	      "options:\n"
+	      "  --json          one JSON object per answer\n"
+	      "  --timeout MS    per attempt (default 500)\n"
+	      "  --retries N     further attempts after a timeout (default 2)\n"
+	      "commands:\n"
+	      "  OPERATION ARGS  any operation of the command table (see 'help')\n"
+	      "  help [OP]       the operations, or one with its arguments\n"
+	      "  info            protocol version and command table checksum of the unit\n"
+	      "  watch [--count N] [--interval MS]\n"
+	      "                  state, pose, speed, battery and alarms until Ctrl-C\n"
+	      "  record FILE --duration S [--interval MS]\n"
+	      "                  the same as CSV rows into FILE\n",
+	      f);
+}
+
+static void print_help_op(const cmd_def_t *d)
+{
+	printf("%2u %s", d->opcode, d->name);
+	for (unsigned i = 0; i < d->n_in; i++) {
+		const char *n;
+		size_t l = cmd_field_name(d->in_names, i, &n);
+
+		printf(" <%.*s:%s>", (int)l, n, cmd_type_idl(d->in_types[i]));
+	}
+	if (d->n_out) {
+		printf(" ->");
+		for (unsigned i = 0; i < d->n_out; i++) {
+			const char *n;
+			size_t l = cmd_field_name(d->out_names, i, &n);
+
+			printf(" %.*s:%s", (int)l, n, cmd_type_idl(d->out_types[i]));
+		}
+	}
+	printf("\n    %s\n", d->help);
+}
+
+static int cmd_help(int argc, char **argv)
+{
+	if (argc > 1) {
+		const cmd_def_t *d = cmd_by_name(argv[1]);
+
+		if (!d) {
+			fprintf(stderr, "vehiclectl: no operation %s\n", argv[1]);
+			return 2;
+		}
+		print_help_op(d);
+		return 0;
+	}
+	printf("Operations (protocol %d, table 0x%04X):\n", CMD_PROTO_VERSION,
+	       (unsigned)cmd_table_crc());
+	for (unsigned i = 0; i < CMD_COUNT; i++)
+		print_help_op(&cmd_table[i]);
+	return 0;
+}
+
+static void json_str(FILE *f, const char *s)
+{
+	fputc('"', f);
+	for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
+		if (*p == '"' || *p == '\\')
+			fprintf(f, "\\%c", *p);
+		else if (*p < 0x20 || *p >= 0x7f)
+			fprintf(f, "\\u%04x", *p);
+		else
+			fputc(*p, f);
+	}
+	fputc('"', f);
+}
+
+static const char *alarm_type(uint8_t t)
+{
+	return t == VS_ALARM_FAULT ? "fault" : t == VS_ALARM_WARNING ? "warning" : "unknown";
+}
+
+static void print_double(double d, bool json)
+{
+	if (json && !isfinite(d))
+		printf("null");
+	else
+		printf("%.17g", d);
+}
+
+static void print_result(const cmd_def_t *d, bool r, const cmd_value_t out[], bool json)
+{
+	if (json)
+		printf("{\"op\":\"%s\",\"result\":%s", d->name, r ? "true" : "false");
+	else
+		printf("%s", r ? "true" : "false");
+	for (unsigned i = 0; i < d->n_out; i++) {
+		const char *n;
+		size_t l = cmd_field_name(d->out_names, i, &n);
+		const cmd_value_t *v = &out[i];
+
+		printf(json ? ",\"%.*s\":" : " %.*s=", (int)l, n);
+		switch (d->out_types[i]) {
+		case CMD_T_BOOL:
+			printf("%s", v->b ? "true" : "false");
+			break;
+		case CMD_T_SHORT:
+			printf("%d", v->h);
+			break;
+		case CMD_T_ULONG:
+			printf("%lu", (unsigned long)v->u);
+			break;
+		case CMD_T_DOUBLE:
+			print_double(v->d, json);
+			break;
+		case CMD_T_STRING:
+			json_str(stdout, v->s);
+			break;
+		case CMD_T_ALARMS:
+			printf(json ? "[" : "%u[", (unsigned)v->alarms.n);
+			for (uint16_t k = 0; k < v->alarms.n; k++) {
+				const vs_alarm_t *a = &v->alarms.a[k];
+
+				if (json)
+					printf("%s{\"code\":%lu,\"type\":\"%s\",\"source\":",
+					       k ? "," : "", (unsigned long)a->code,
+					       alarm_type(a->type));
+				else
+					printf("%s%lu %s ", k ? ", " : "", (unsigned long)a->code,
+					       alarm_type(a->type));
+				json_str(stdout, a->source);
+				if (json)
+					printf("}");
+			}
+			printf("]");
+			break;
+		default:
+			break;
+		}
+	}
+	printf(json ? "}\n" : "\n");
+}
+
+static int report_err(vc_client_t *c, int e)
+{
+	if (e == VC_E_NAK)
+		fprintf(stderr, "vehiclectl: %s: %s\n", vc_strerror(e), wire_status_name(c->nak));
+	else if (e == VC_E_REMOTE)
+		fprintf(stderr, "vehiclectl: error %s\n", c->remote_msg);
+	else
+		fprintf(stderr, "vehiclectl: %s%s%s\n", vc_strerror(e), errno ? ": " : "",
+			errno ? strerror(errno) : "");
+	return 3;
+}
+
+static int cmd_op(vc_client_t *c, const cmd_def_t *d, int argc, char **argv, bool json)
+{
+	cmd_value_t in[CMD_MAX_FIELDS], out[CMD_MAX_FIELDS];
+	bool r = false;
+	int e;
+
+	if (argc - 1 != d->n_in) {
+		fprintf(stderr, "vehiclectl: %s takes %u argument%s, got %d\n", d->name, d->n_in,
+			d->n_in == 1 ? "" : "s", argc - 1);
+		return 2;
+	}
+	memset(in, 0, sizeof(in));
+	for (unsigned i = 0; i < d->n_in; i++) {
+		const char *tok = argv[i + 1];
+		int64_t iv = 0;
+		bool ok = false;
+
+		switch (d->in_types[i]) {
+		case CMD_T_BOOL:
+			ok = np_parse_bool(tok, &in[i].b);
+			break;
+		case CMD_T_DOUBLE:
+			ok = np_parse_double(tok, &in[i].d) == NP_OK;
+			break;
+		case CMD_T_SHORT:
+			ok = np_parse_int(tok, INT16_MIN, INT16_MAX, &iv) == NP_OK;
+			in[i].h = (int16_t)iv;
+			break;
+		case CMD_T_ULONG:
+			ok = np_parse_int(tok, 0, UINT32_MAX, &iv) == NP_OK;
+			in[i].u = (uint32_t)iv;
+			break;
+		default:
+			break;
+		}
+		if (!ok) {
+			const char *n;
+			size_t l = cmd_field_name(d->in_names, i, &n);
+
+			fprintf(stderr, "vehiclectl: %s %.*s: not a %s: %s\n", d->name, (int)l, n,
+				cmd_type_idl(d->in_types[i]), tok);
+			return 2;
+		}
+	}
+	errno = 0;
+	e = vc_call(c, d, in, &r, out);
+	if (e != VC_OK)
+		return report_err(c, e);
+	print_result(d, r, out, json);
+	return r ? 0 : 1;
+}
+
+static int cmd_info(vc_client_t *c, bool json)
+{
+	unsigned ver = 0, ops = 0;
+	uint16_t crc = 0;
+	int e;
+
+	errno = 0;
+	e = vc_info(c, &ver, &crc, &ops);
+	if (e != VC_OK)
+		return report_err(c, e);
+	if (json)
+		printf("{\"protocol\":%u,\"table\":%u,\"operations\":%u,\"match\":%s}\n", ver, crc,
+		       ops, ver == CMD_PROTO_VERSION && crc == cmd_table_crc() ? "true" : "false");
+	else
+		printf("protocol %u table 0x%04X operations %u (%s this vehiclectl)\n", ver, crc,
+		       ops,
+		       ver == CMD_PROTO_VERSION && crc == cmd_table_crc() ? "matches"
+									  : "DIFFERS from");
+	return 0;
+}
+
+/* One sample of the unit for watch and record. */
+typedef struct {
+	double t;
+	int16_t state;
+	char msg[VS_STATE_MSG_MAX];
+	vs_position_t pos;
+	double speed_t, speed_r; /* from successive poses, mm/s and deg/s */
+	double battery;
+	int16_t alarms;
+	uint32_t code; /* newest alarm, 0 if none */
+} sample_t;
+
+static int take_sample(vc_client_t *c, sample_t *s)
+{
+	vs_alarm_t a[1];
+	uint16_t n = 0;
+	int e;
+
+	memset(a, 0, sizeof(a));
+	if ((e = vc_getState(c, NULL, &s->state, s->msg)) != VC_OK ||
+	    (e = vc_getPosition(c, NULL, &s->pos)) != VC_OK ||
+	    (e = vc_getBatteryVoltage(c, NULL, &s->battery)) != VC_OK ||
+	    (e = vc_getActiveAlarm(c, NULL, 1, &s->alarms, a, &n)) != VC_OK)
+		return e;
+	s->code = n ? a[0].code : 0;
+	return VC_OK;
+}
+
+static double now_s(void)
+{
+	struct timespec ts;
+
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+}
+
+static void sleep_until(double t)
+{
+	double d = t - now_s();
+
+	if (d > 0) {
+		struct timespec ts = {(time_t)d, (long)((d - floor(d)) * 1e9)};
+
+		nanosleep(&ts, NULL);
+	}
+}
+
+static void derive_speed(sample_t *s, const sample_t *prev)
+{
+	double dt = s->t - prev->t, dth;
+
+	if (dt <= 0)
+		return;
+	s->speed_t = hypot(s->pos.x - prev->pos.x, s->pos.y - prev->pos.y) / dt;
+	dth = fmod(s->pos.theta - prev->pos.theta + 540.0, 360.0) - 180.0;
+	s->speed_r = dth / dt;
+}
+
+static int sample_loop(vc_client_t *c, FILE *csv, bool json, long count, double duration,
+		       unsigned interval_ms)
+{
+	sample_t prev = {0}, s;
+	double t0 = now_s(), next = t0;
+	bool have_prev = false;
+	long k = 0;
+
+	if (csv)
+		fprintf(csv, "t_s,state,msg,x_mm,y_mm,theta_deg,speed_mm_s,speed_deg_s,"
+			     "battery_0_1V,alarms,newest_alarm\n");
+	while (!stop_requested && (count < 0 || k < count) &&
+	       (duration < 0 || now_s() - t0 <= duration)) {
+		int e;
+
+		memset(&s, 0, sizeof(s));
+		s.t = now_s() - t0;
+		errno = 0;
+		e = take_sample(c, &s);
+		if (e != VC_OK)
+			return report_err(c, e);
+		if (have_prev)
+			derive_speed(&s, &prev);
+		if (csv) {
+			fprintf(csv, "%.3f,%d,%s,%.3f,%.3f,%.3f,%.3f,%.3f,%.1f,%d,%lu\n", s.t,
+				s.state, s.msg, s.pos.x, s.pos.y, s.pos.theta, s.speed_t, s.speed_r,
+				s.battery, s.alarms, (unsigned long)s.code);
+			fflush(csv);
+		} else if (json) {
+			printf("{\"t\":%.3f,\"state\":%d,\"msg\":", s.t, s.state);
+			json_str(stdout, s.msg);
+			printf(",\"x\":%.3f,\"y\":%.3f,\"theta\":%.3f,\"speed\":%.3f,"
+			       "\"rotation\":%.3f,\"battery\":%.1f,\"alarms\":%d,\"newest\":%lu}\n",
+			       s.pos.x, s.pos.y, s.pos.theta, s.speed_t, s.speed_r, s.battery,
+			       s.alarms, (unsigned long)s.code);
+		} else {
+			printf("%8.3f s  %-12s x %9.3f y %9.3f th %8.3f  v %8.3f mm/s %8.3f deg/s  "
+			       "bat %5.1f  alarms %d%s",
+			       s.t, s.msg, s.pos.x, s.pos.y, s.pos.theta, s.speed_t, s.speed_r,
+			       s.battery / 10.0, s.alarms, s.code ? " newest " : "");
+			if (s.code)
+				printf("%lu", (unsigned long)s.code);
+			printf("\n");
+		}
+		fflush(stdout);
+		prev = s;
+		have_prev = true;
+		k++;
+		next += interval_ms / 1000.0;
+		sleep_until(next);
+	}
+	return 0;
+}
+
+static bool parse_ulong(const char *s, unsigned long max, unsigned long *out)
+{
+	char *end;
+
+	errno = 0;
+	*out = strtoul(s, &end, 10);
+	return *s && !*end && errno == 0 && *out <= max;
+}
+
+/* watch/record options after the command word. */
+static int loop_cmd(vc_client_t *c, int argc, char **argv, bool json, bool record)
+{
+	long count = -1;
+	double duration = -1;
+	unsigned long interval = 200, v;
+	const char *file = NULL;
+	FILE *csv = NULL;
+	int rc;
+
+	for (int i = 1; i < argc; i++) {
+		if (strcmp(argv[i], "--count") == 0 && i + 1 < argc &&
+		    parse_ulong(argv[i + 1], 1000000000, &v)) {
+			count = (long)v;
+			i++;
+		} else if (strcmp(argv[i], "--interval") == 0 && i + 1 < argc &&
+			   parse_ulong(argv[i + 1], 3600000, &v) && v > 0) {
+			interval = v;
+			i++;
+		} else if (strcmp(argv[i], "--duration") == 0 && i + 1 < argc &&
+			   np_parse_double(argv[i + 1], &duration) == NP_OK && duration >= 0) {
+			i++;
+		} else if (record && !file && argv[i][0] != '-') {
+			file = argv[i];
+		} else {
+			fprintf(stderr, "vehiclectl: %s: bad option %s\n", argv[0], argv[i]);
+			return 2;
+		}
+	}
+	if (record) {
+		if (!file || (duration < 0 && count < 0)) {
+			fprintf(stderr, "vehiclectl: record FILE --duration S [--interval MS]\n");
+			return 2;
+		}
+		csv = fopen(file, "w");
+		if (!csv) {
+			fprintf(stderr, "vehiclectl: %s: %s\n", file, strerror(errno));
+			return 3;
+		}
+	}
+	rc = sample_loop(c, csv, json, count, duration, (unsigned)interval);
+	if (csv && fclose(csv) != 0) {
+		fprintf(stderr, "vehiclectl: %s: write failed\n", file);
+		rc = 3;
+	}
+	return rc;
+}
+
+int main(int argc, char **argv)
+{
+	const char *port = NULL, *can = NULL;
+	unsigned long baud = VC_DEFAULT_BAUD, node = 1, timeout = VC_DEFAULT_TIMEOUT_MS,
+		      retries = VC_DEFAULT_RETRIES;
+	bool console = false, json = false;
+	vc_client_t *c;
+	const cmd_def_t *d = NULL;
+	int rc, e, o;
+
+	enum { O_PORT = 1, O_BAUD, O_CONSOLE, O_CAN, O_NODE, O_JSON, O_TIMEOUT, O_RETRIES, O_HELP };
+	static const struct option opts[] = {
+	    {"port", required_argument, NULL, O_PORT},
+	    {"baud", required_argument, NULL, O_BAUD},
+	    {"console", no_argument, NULL, O_CONSOLE},
+	    {"can", required_argument, NULL, O_CAN},
+	    {"node", required_argument, NULL, O_NODE},
+	    {"json", no_argument, NULL, O_JSON},
+	    {"timeout", required_argument, NULL, O_TIMEOUT},
+	    {"retries", required_argument, NULL, O_RETRIES},
+	    {"help", no_argument, NULL, O_HELP},
+	    {NULL, 0, NULL, 0},
+	};
+
+	/* '+': options end at the command, so negative numbers pass through. */
+	while ((o = getopt_long(argc, argv, "+", opts, NULL)) != -1) {
+		switch (o) {
+		case O_PORT:
+			port = optarg;
+			break;
+		case O_CAN:
+			can = optarg;
+			break;
+		case O_CONSOLE:
+			console = true;
+			break;
+		case O_JSON:
+			json = true;
+			break;
+		case O_BAUD:
+		case O_NODE:
+		case O_TIMEOUT:
+		case O_RETRIES: {
+			unsigned long *dst = o == O_BAUD      ? &baud
+					     : o == O_NODE    ? &node
+					     : o == O_TIMEOUT ? &timeout
+							      : &retries;
+
+			if (!parse_ulong(optarg,
+					 o == O_BAUD   ? 4000000
+					 : o == O_NODE ? 127
+						       : 60000,
+					 dst)) {
+				fprintf(stderr, "vehiclectl: bad number %s\n", optarg);
+				return 2;
+			}
+			break;
+		}
+		case O_HELP:
+			usage(stdout);
+			return 0;
+		default:
+			usage(stderr);
+			return 2;
+		}
+	}
+	argc -= optind;
+	argv += optind;
+	if (argc < 1) {
+		usage(stderr);
+		return 2;
+	}
+	if (strcmp(argv[0], "help") == 0)
+		return cmd_help(argc, argv);
+	if (strcmp(argv[0], "info") != 0 && strcmp(argv[0], "watch") != 0 &&
+	    strcmp(argv[0], "record") != 0) {
+		d = cmd_by_name(argv[0]);
+		if (!d) {
+			fprintf(stderr, "vehiclectl: no operation %s (try 'vehiclectl help')\n",
+				argv[0]);
+			return 2;
+		}
+	}
+	if (!port == !can) {
+		fprintf(stderr, "vehiclectl: give one link: --port DEV or --can IFACE\n");
+		return 2;
+	}
+
+	c = calloc(1, sizeof(*c));
+	if (!c)
+		return 3;
+	errno = 0;
+	if (port)
+		e = console ? vc_open_console(c, port, (unsigned)baud)
+			    : vc_open_serial(c, port, (unsigned)baud);
+	else
+		e = vc_open_can(c, can, (unsigned)node);
+	if (e != VC_OK) {
+		fprintf(stderr, "vehiclectl: %s: %s\n", port ? port : can,
+			errno ? strerror(errno) : vc_strerror(e));
+		free(c);
+		return 3;
+	}
+	c->timeout_ms = (unsigned)timeout;
+	c->retries = (unsigned)retries;
+
+	{
+		struct sigaction sa;
+
+		memset(&sa, 0, sizeof(sa));
+		sa.sa_handler = on_signal;
+		sigemptyset(&sa.sa_mask);
+		sigaction(SIGINT, &sa, NULL);
+		sigaction(SIGTERM, &sa, NULL);
+	}
+
+	if (d)
+		rc = cmd_op(c, d, argc, argv, json);
+	else if (strcmp(argv[0], "info") == 0)
+		rc = cmd_info(c, json);
+	else
+		rc = loop_cmd(c, argc, argv, json, strcmp(argv[0], "record") == 0);
+	vc_close(c);
+	free(c);
+	return rc;
+}
