@@ -1,0 +1,76 @@
+# libFuzzer targets (tests/fuzz/fuzz_*.c), built with clang under ASan+UBSan.
+#
+#   make fuzz                 every target for FUZZ_TIME s (default 60) in turn,
+#                             new inputs kept in $(BUILD)/fuzz/corpus/<target>
+#   make fuzz FUZZ_TARGETS=fuzz_ops FUZZ_TIME=600   one target, longer
+#   make fuzz-ci              replay the committed corpora, then every target
+#                             for FUZZ_CI_TIME s (>= 60), FUZZ_JOBS at a time
+#   make fuzz-build           just build them
+#
+# Seeds: tests/fuzz/corpus/<target>/; dictionary: tests/fuzz/<target>.dict.
+# A crash leaves its input in $(BUILD)/fuzz/artifacts/; replay it with
+# $(BUILD)/fuzz/<target> <file>. The code under test is compiled again here
+# (not the gcc objects of `make`), with -fsanitize=fuzzer-no-link.
+
+FUZZ_CC ?= clang
+FUZZ_TIME ?= 60
+FUZZ_CI_TIME ?= 60
+FUZZ_JOBS ?= 2
+FUZZ_BUILD := $(BUILD)/fuzz
+FUZZ_SAN := -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
+FUZZ_CFLAGS := -std=c11 -g -O1 -I. -D_GNU_SOURCE -MMD -MP $(FUZZ_SAN) -fsanitize=fuzzer-no-link \
+	-Wall -Wextra
+FUZZ_SUT_SRC := $(FW_SRC) $(PROTO_SRC) $(HOST_SRC) $(SIM_SRC)
+FUZZ_ALL := $(patsubst tests/fuzz/%.c,%,$(wildcard tests/fuzz/fuzz_*.c))
+FUZZ_TARGETS ?= $(FUZZ_ALL)
+FUZZ_BINS := $(addprefix $(FUZZ_BUILD)/,$(FUZZ_ALL))
+# libFuzzer options shared by every run: a hang is a finding (10 s per input).
+FUZZ_OPTS := -timeout=10 -rss_limit_mb=2048 -print_final_stats=1
+
+.PHONY: fuzz fuzz-build fuzz-ci fuzz-replay $(addprefix fuzz-run-,$(FUZZ_ALL))
+
+$(FUZZ_BUILD)/obj/%.o: %.c
+	@mkdir -p $(dir $@)
+	@$(if $(Q),echo "  FUZZCC  $<")
+	$(Q)$(FUZZ_CC) $(FUZZ_CFLAGS) $(if $(filter tests/fuzz/%,$<),-Werror) -c $< -o $@
+
+$(FUZZ_BUILD)/libsut.a: $(patsubst %.c,$(FUZZ_BUILD)/obj/%.o,$(FUZZ_SUT_SRC))
+	@$(if $(Q),echo "  AR      $@")
+	$(Q)rm -f $@ && $(AR) rcs $@ $^
+
+$(FUZZ_BUILD)/fuzz_%: $(FUZZ_BUILD)/obj/tests/fuzz/fuzz_%.o $(FUZZ_BUILD)/libsut.a
+	@$(if $(Q),echo "  LD      $@")
+	$(Q)$(FUZZ_CC) $(FUZZ_SAN) -fsanitize=fuzzer -o $@ $^ $(LDLIBS_HOST)
+
+fuzz-build: $(FUZZ_BINS)
+
+# One target for $(FUZZ_RUN_TIME) s, seeds read-only, new inputs to the work corpus.
+fuzz-run-%: $(FUZZ_BUILD)/%
+	@mkdir -p $(FUZZ_BUILD)/corpus/$* $(FUZZ_BUILD)/artifacts
+	@echo "  FUZZ    $* for $(FUZZ_RUN_TIME) s"
+	$(Q)$(FUZZ_BUILD)/$* $(FUZZ_OPTS) -max_total_time=$(FUZZ_RUN_TIME) \
+		$(if $(wildcard tests/fuzz/$*.dict),-dict=tests/fuzz/$*.dict) \
+		-artifact_prefix=$(FUZZ_BUILD)/artifacts/$*- \
+		$(FUZZ_BUILD)/corpus/$* tests/fuzz/corpus/$* > $(FUZZ_BUILD)/$*.log 2>&1 \
+		|| { tail -n 60 $(FUZZ_BUILD)/$*.log; exit 1; }
+	@grep -h "stat::number_of_executed_units\|stat::peak_rss_mb" $(FUZZ_BUILD)/$*.log \
+		| sed 's/^/  $* /'
+
+fuzz: $(addprefix $(FUZZ_BUILD)/,$(FUZZ_TARGETS))
+	$(Q)for t in $(FUZZ_TARGETS); do \
+		$(MAKE) --no-print-directory fuzz-run-$$t FUZZ_RUN_TIME=$(FUZZ_TIME) || exit 1; \
+	done
+
+# Every committed corpus input once (a regression test of past findings).
+fuzz-replay: $(FUZZ_BINS)
+	$(Q)for t in $(FUZZ_ALL); do \
+		echo "  REPLAY  $$t ($$(ls tests/fuzz/corpus/$$t | wc -l) inputs)"; \
+		$(FUZZ_BUILD)/$$t -runs=0 tests/fuzz/corpus/$$t > $(FUZZ_BUILD)/$$t.replay.log 2>&1 \
+			|| { tail -n 60 $(FUZZ_BUILD)/$$t.replay.log; exit 1; }; \
+	done
+
+fuzz-ci: fuzz-replay
+	$(Q)$(MAKE) --no-print-directory -j$(FUZZ_JOBS) FUZZ_RUN_TIME=$(FUZZ_CI_TIME) \
+		$(addprefix fuzz-run-,$(FUZZ_ALL))
+
+-include $(shell find $(FUZZ_BUILD)/obj -name '*.d' 2>/dev/null)

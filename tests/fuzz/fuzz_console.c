@@ -1,0 +1,106 @@
+/* Fuzz target: the console line parser (proto/console.c, numparse.c,
+ * cmdtab.c) on a fresh unit on the simulated plant, through the byte stream
+ * a serial link delivers.
+ *
+ * Checked for every line: at most one reply, and it is one printable line
+ * starting "ok" or "error <code> "; an "error" reply leaves the unit
+ * untouched (byte for byte); an "ok false" leaves the motion engine
+ * untouched (refusals only raise a warning). '$wait' is capped so one input
+ * stays fast.
+ */
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "../../host_sim/sim.h"
+
+#define WAIT_CAP_MS 20
+
+static sim_t S;
+static struct {
+	unsigned replies;
+	char last[CONSOLE_REPLY_MAX + 2];
+} out;
+
+static void on_write(void *ctx, const char *s, size_t n)
+{
+	(void)ctx;
+	if (n == 0 || n > CONSOLE_REPLY_MAX + 1 || s[n - 1] != '\n')
+		abort();
+	for (size_t i = 0; i + 1 < n; i++) {
+		unsigned char b = (unsigned char)s[i];
+		if (b < 0x20 || b >= 0x7f)
+			abort(); /* one printable line */
+	}
+	if (!(n >= 3 && memcmp(s, "ok", 2) == 0 && (s[2] == ' ' || s[2] == '\n')) &&
+	    !(n > 8 && memcmp(s, "error ", 6) == 0 && s[6] >= '1' && s[6] <= '9'))
+		abort();
+	memcpy(out.last, s, n);
+	out.last[n] = '\0';
+	out.replies++;
+}
+
+/* The simulator's extras, with '$wait' capped. */
+static bool extra(void *ctx, int argc, char **argv, char *reply, size_t cap)
+{
+	if (argc >= 2 && strcmp(argv[0], "$wait") == 0) {
+		long ms = strtol(argv[1], NULL, 10);
+		if (ms > WAIT_CAP_MS || ms < 0) {
+			snprintf(reply, cap, "error 8 capped");
+			return true;
+		}
+	}
+	return sim_extra(ctx, argc, argv, reply, cap);
+}
+
+static bool is_set_power(const char *line, size_t n)
+{
+	size_t i = 0;
+	while (i < n && (line[i] == ' ' || line[i] == '\t'))
+		i++;
+	return n - i >= 8 && strncasecmp(line + i, "setpower", 8) == 0;
+}
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+	static vehicle_t before;
+	static motion_t mbefore;
+	vs_config_t cfg;
+
+	vs_config_defaults(&cfg);
+	if (sim_init(&S, &cfg, NULL) != 0)
+		abort();
+	console_set_extra(&S.console, extra, &S);
+	sim_set_output(&S, on_write, NULL);
+
+	/* One line at a time (with its terminator), so that each reply can be
+	 * judged against the unit's state just before its line. */
+	size_t start = 0;
+	while (start < size) {
+		size_t end = start;
+		while (end < size && data[end] != '\n' && data[end] != '\r')
+			end++;
+		size_t n = end < size ? end - start + 1 : end - start;
+		unsigned r0 = out.replies;
+		before = S.vehicle;
+		mbefore = S.vehicle.motion;
+		console_feed(&S.console, data + start, n);
+		if (out.replies > r0 + 1)
+			abort(); /* more than one reply for one line */
+		if (out.replies == r0 + 1) {
+			if (memcmp(out.last, "error", 5) == 0 &&
+			    memcmp(&before, &S.vehicle, sizeof before) != 0)
+				abort(); /* a rejected line changed the unit */
+			if (strcmp(out.last, "ok false\n") == 0 &&
+			    !is_set_power((const char *)data + start, n) &&
+			    memcmp(&mbefore, &S.vehicle.motion, sizeof mbefore) != 0)
+				abort(); /* a refused operation touched the motion */
+		}
+		start += n;
+	}
+	/* The tail without a line end: its reply comes at the next line end. */
+	console_feed(&S.console, (const uint8_t *)"\n", 1);
+	return 0;
+}

@@ -1,0 +1,356 @@
+/* Stateful fuzz target: random sequences of the 34 operations, hardware
+ * events and time, on the firmware and the ideal simulated plant.
+ *
+ * After every control tick:
+ *   - getState reports a valid code, its message matches it (Alarm-### /
+ *     Warning-### name an active alarm of that type), Alarm exactly when a
+ *     fault is active, never Avoid;
+ *   - the commanded body velocity stays within getVelocityLimit, and while
+ *     the servo stays on it changes by at most getAccelerationLimit;
+ *     a differential base never gets y velocity;
+ *   - a fault or power off leaves every drive disabled with a zero setpoint;
+ *   - a unit that came to rest stays at rest (zero command, plant pose
+ *     within 2 mm / 0.5 deg) until an accepted command may move it again
+ *     (move*, resume, setJoystick(true)).
+ *
+ * Input bytes: a sequence of actions, each an action byte and its argument
+ * bytes (missing bytes read as 0). Byte 0 picks the base (bit 0: mecanum).
+ */
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "../../host_sim/sim.h"
+
+#define MAX_ACTIONS 96
+#define MAX_TICKS 20000 /* per input: 20 s at 1 kHz */
+
+typedef struct {
+	const uint8_t *p;
+	size_t n, i;
+} rd_t;
+
+static uint8_t u8(rd_t *r)
+{
+	return r->i < r->n ? r->p[r->i++] : 0;
+}
+
+static uint32_t u32(rd_t *r)
+{
+	uint32_t v = 0;
+	for (int k = 0; k < 4; k++)
+		v = v << 8 | u8(r);
+	return v;
+}
+
+/* Doubles: mostly values near the edges that matter, sometimes raw bits. */
+static double dbl(rd_t *r)
+{
+	static const double tab[] = {
+	    0.0,     -0.0,   1.0,      -1.0,    0.5,     10.0,     -10.0,  45.0,     90.0,
+	    -90.0,   100.0,  -100.0,   179.9,   180.0,   180.001,  -180.0, 200.0,    360.0,
+	    -360.0,  499.9,  500.0,    999.999, 1000.0,  1000.001, -1000.0, 1e-9,    5e-324,
+	    36000.0, 36000.1, 1e6,     -1e6,    1e6 + 1, 1e300,    -1e300, NAN,      INFINITY,
+	    -INFINITY, 3.0,  2000.0,   -2000.0, 0.001,   250.0,    720.0,  100000.0, 100001.0,
+	};
+	uint8_t k = u8(r);
+	if (k < sizeof tab / sizeof tab[0])
+		return tab[k];
+	if (k < 200)
+		return (double)(int8_t)u8(r) * 25.0; /* -3200 .. 3175 in steps */
+	double d;
+	uint64_t b = (uint64_t)u32(r) << 32 | u32(r);
+	memcpy(&d, &b, sizeof d);
+	return d;
+}
+
+static sim_t S;
+static bool armed;          /* a command may be moving the unit */
+static double rest_x, rest_y, rest_th;
+static bool have_rest;
+static fx_twist_t prev_cmd;
+static bool prev_servo;
+/* A frozen encoder was injected: the wheel loop then drives that wheel
+ * until 203/204 stop it, so a resting unit may move by up to the
+ * following-error limit (docs/faults.md). */
+static bool encoder_frozen;
+
+static bool twist_zero(const fx_twist_t *t)
+{
+	return t->vx_pt == 0 && t->vy_pt == 0 && t->w_pt == 0;
+}
+
+static void check_state(void)
+{
+	vehicle_t *v = &S.vehicle;
+	int16_t st = 0;
+	char msg[VS_STATE_MSG_MAX];
+	char want[VS_STATE_MSG_MAX + 8];
+
+	vs_getState(v, &st, msg);
+	if (memchr(msg, 0, sizeof msg) == NULL)
+		abort();
+	const vs_alarm_t *f = alarm_newest(&v->alarms, VS_ALARM_FAULT);
+	const vs_alarm_t *w = alarm_newest(&v->alarms, VS_ALARM_WARNING);
+	if ((st == VS_STATE_ALARM) != (f != NULL))
+		abort();
+	switch (st) {
+	case VS_STATE_READY: snprintf(want, sizeof want, "Ready"); break;
+	case VS_STATE_BUSY: snprintf(want, sizeof want, "Busy"); break;
+	case VS_STATE_WARNING:
+		if (!w)
+			abort();
+		snprintf(want, sizeof want, "Warning-%03u", (unsigned)w->code);
+		break;
+	case VS_STATE_ALARM: snprintf(want, sizeof want, "Alarm-%03u", (unsigned)f->code); break;
+	case VS_STATE_STUCK: snprintf(want, sizeof want, "Stuck"); break;
+	case VS_STATE_PAUSED: snprintf(want, sizeof want, "Paused"); break;
+	case VS_STATE_LOCKED: snprintf(want, sizeof want, "Locked"); break;
+	case VS_STATE_POWERED: snprintf(want, sizeof want, "Powered"); break;
+	case VS_STATE_UNPOWERED: snprintf(want, sizeof want, "Unpowered"); break;
+	default: abort(); /* Avoid or an invalid code */
+	}
+	if (strcmp(msg, want) != 0)
+		abort();
+	for (unsigned i = 0; i < v->alarms.n; i++) {
+		uint32_t c = v->alarms.a[i].code;
+		if (!((c >= 110 && c <= 152) || (c >= 201 && c <= 209)) ||
+		    v->alarms.a[i].type != (uint8_t)alarm_type_of(c) ||
+		    !memchr(v->alarms.a[i].source, 0, VS_ALARM_SOURCE_MAX))
+			abort();
+	}
+}
+
+static void check_tick(void)
+{
+	vehicle_t *v = &S.vehicle;
+	const vs_config_t *c = &S.cfg;
+	const fx_twist_t *t = &v->cmd;
+	double hz = c->tick_hz, q = 4294967296.0;
+	/* One Q32 LSB of slack for the conversions. */
+	double vt = c->vel_limit_t_mm_s / hz * q + 2, vr = c->vel_limit_r_deg_s / hz * q + 2;
+	double at = c->acc_limit_t_mm_s2 / hz / hz * q + 2;
+	double ar = c->acc_limit_r_deg_s2 / hz / hz * q + 2;
+
+	check_state();
+	if (fabs((double)t->vx_pt) > vt || fabs((double)t->vy_pt) > vt || fabs((double)t->w_pt) > vr)
+		abort(); /* velocity limit */
+	if (c->kinematics == VS_KIN_DIFF && t->vy_pt != 0)
+		abort();
+	if (prev_servo && v->servo &&
+	    (fabs((double)(t->vx_pt - prev_cmd.vx_pt)) > at ||
+	     fabs((double)(t->vy_pt - prev_cmd.vy_pt)) > at ||
+	     fabs((double)(t->w_pt - prev_cmd.w_pt)) > ar))
+		abort(); /* acceleration limit */
+	if (alarm_any_fault(&v->alarms) || !v->powered) {
+		if (v->servo)
+			abort();
+		for (uint8_t i = 0; i < S.plant.n; i++)
+			if (S.plant.w[i].enable_cmd || S.plant.w[i].setpoint_q8 != 0)
+				abort();
+	}
+	if (!v->powered && S.plant.relay_cmd)
+		abort();
+
+	/* At rest with nothing pending: disarm and remember where. */
+	if (armed && !motion_has_work(&v->motion) && motion_mode(&v->motion) == MODE_IDLE &&
+	    twist_zero(t) && !v->joystick_on) {
+		armed = false;
+		have_rest = false;
+	}
+	if (!armed) {
+		if (!twist_zero(t))
+			abort(); /* moving without a command */
+		double x, y, th;
+		plant_pose(&S.plant, &x, &y, &th);
+		if (!have_rest) {
+			rest_x = x, rest_y = y, rest_th = th;
+			have_rest = true;
+		}
+		double dth = fabs(th - rest_th);
+		if (dth > 180.0)
+			dth = 360.0 - dth;
+		double lim_mm = encoder_frozen ? c->following_error_mm * 1.5 + 2.0 : 2.0;
+		double lim_deg = encoder_frozen ? 45.0 : 0.5;
+		if (hypot(x - rest_x, y - rest_y) > lim_mm || dth > lim_deg)
+			abort(); /* drifted without a command */
+	}
+	prev_cmd = *t;
+	prev_servo = v->servo;
+}
+
+static void tick(void)
+{
+	sim_tick(&S);
+	check_tick();
+}
+
+static bool act(rd_t *r, unsigned *ticks)
+{
+	vehicle_t *v = &S.vehicle;
+	plant_t *pl = &S.plant;
+	uint8_t a = u8(r);
+	bool moved = false;
+
+	switch (a % 48) {
+	case 0: vs_clearAlarm(v); break;
+	case 1: {
+		int16_t n = (int16_t)(u8(r) % 20) - 2, na;
+		vs_alarm_t al[20];
+		uint16_t len = 0;
+		vs_getActiveAlarm(v, n, &na, al, &len);
+		if (len > 20 || (n >= 0 && len > n) || na != v->alarms.n)
+			abort();
+		break;
+	}
+	case 2: {
+		uint32_t in = 0;
+		vs_getInput(v, u8(r) % 12, &in);
+		break;
+	}
+	case 3: {
+		bool st;
+		vs_getServoStatus(v, u8(r) % 6, &st);
+		break;
+	}
+	case 4: {
+		vs_position_t p;
+		vs_getPosition(v, &p);
+		if (!isfinite(p.x) || !isfinite(p.y) || !(p.theta > -180.0 && p.theta <= 180.0))
+			abort();
+		break;
+	}
+	case 5: {
+		vs_point_t c = {dbl(r), dbl(r)};
+		moved = vs_moveCircularRel(v, c, dbl(r));
+		break;
+	}
+	case 6: {
+		vs_position_t p = {dbl(r), dbl(r), dbl(r)};
+		moved = vs_moveContinuousRel(v, p);
+		break;
+	}
+	case 7: {
+		vs_point_t c = {dbl(r), dbl(r)};
+		moved = vs_moveCruiseAbs(v, c);
+		break;
+	}
+	case 8: moved = vs_moveForward(v, dbl(r)); break;
+	case 9: case 10: {
+		double x = dbl(r), y = dbl(r), w = dbl(r);
+		moved = vs_moveJog(v, x, y, w);
+		break;
+	}
+	case 11: {
+		vs_position_t p = {dbl(r), dbl(r), dbl(r)};
+		moved = vs_moveLinearAbs(v, p);
+		break;
+	}
+	case 12: {
+		vs_position_t p = {dbl(r), dbl(r), dbl(r)};
+		moved = vs_moveLinearRel(v, p);
+		break;
+	}
+	case 13: moved = vs_moveTurn(v, dbl(r)); break;
+	case 14: vs_pause(v); break;
+	case 15: vs_resume(v); moved = true; break;
+	case 16: {
+		vs_velocity_t acc = {dbl(r), dbl(r)};
+		vs_setAcceleration(v, acc);
+		break;
+	}
+	case 17: vs_setDigitalSensorLock(v, u8(r) & 1); break;
+	case 18: vs_setJogTimeout(v, (int16_t)(u8(r) << 8 | u8(r))); break;
+	case 19: {
+		bool on = u8(r) & 1;
+		vs_setJoystick(v, on);
+		moved = on;
+		break;
+	}
+	case 20: vs_setOutput(v, u8(r) % 12, u32(r), u32(r)); break;
+	case 21: {
+		vs_position_t p = {dbl(r), dbl(r), dbl(r)};
+		vs_setPosition(v, p);
+		break;
+	}
+	case 22: vs_setPower(v, u8(r) & 1); break;
+	case 23: vs_setServo(v, u8(r) & 1); break;
+	case 24: {
+		vs_velocity_t vel = {dbl(r), dbl(r)};
+		vs_setVelocity(v, vel);
+		break;
+	}
+	case 25: vs_stop(v); break;
+	case 26: vs_unlock(v); break;
+	/* hardware events */
+	case 27: pl->contact_inject = u8(r) & 1; break;
+	case 28: pl->obstacle = u8(r) & 1; break;
+	case 29: pl->caution = u8(r) & 1; break;
+	case 30: pl->estop = u8(r) & 1; break;
+	case 31: plant_set_relay_mode(pl, (plant_relay_mode_t)(u8(r) % 3)); break;
+	case 32: {
+		uint8_t ax = u8(r) % pl->n;
+		switch (u8(r) % 4) {
+		case 0: plant_drive_fault(pl, ax, (uint16_t)(u8(r) | 1)); break;
+		case 1: plant_drive_ok(pl, ax); break;
+		case 2:
+			plant_drive_stuck(pl, ax, true);
+			encoder_frozen = true;
+			break;
+		default: plant_drive_silent(pl, ax, true); break;
+		}
+		break;
+	}
+	case 33: plant_set_battery_ocv(pl, 18.0 + (double)(u8(r) % 80) * 0.1); break;
+	case 34: {
+		bool present = u8(r) % 8 != 0;
+		double x = (double)(int8_t)u8(r) / 127.0, y = (double)(int8_t)u8(r) / 127.0;
+		double w = (double)(int8_t)u8(r) / 127.0;
+		plant_set_joystick(pl, x, y, w, present);
+		break;
+	}
+	case 35: plant_set_input(pl, u8(r) % 6, u32(r)); break;
+	/* time: most actions are ticks */
+	default: {
+		unsigned n = 1u + (unsigned)u8(r) * ((a & 1) ? 8u : 1u);
+		for (unsigned k = 0; k < n && *ticks < MAX_TICKS; k++, (*ticks)++)
+			tick();
+		break;
+	}
+	}
+	if (moved)
+		armed = true;
+	return *ticks < MAX_TICKS;
+}
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+	vs_config_t cfg;
+	plant_params_t pp;
+	rd_t r = {data, size, 0};
+	unsigned ticks = 0;
+
+	vs_config_defaults(&cfg);
+	if (u8(&r) & 1) {
+		cfg.kinematics = VS_KIN_OMNI;
+		cfg.wheel_base_mm = 400.0;
+	}
+	plant_params_ideal(&pp);
+	if (sim_init(&S, &cfg, &pp) != 0)
+		abort();
+	armed = false;
+	have_rest = false;
+	encoder_frozen = false;
+	prev_servo = false;
+	prev_cmd = (fx_twist_t){0, 0, 0};
+	for (unsigned k = 0; k < MAX_ACTIONS && r.i < r.n; k++)
+		if (!act(&r, &ticks))
+			break;
+	/* Let the last command play out a little. */
+	for (unsigned k = 0; k < 200; k++)
+		tick();
+	return 0;
+}
