@@ -14,8 +14,17 @@ int64_t fx_mul_q30(int64_t a, int32_t b_q30)
 
 q32_t fx_mul(q32_t a, q32_t b)
 {
+	/* Magnitudes, rounded half away from zero, so every build (with or
+	 * without 128-bit integers) produces the same bits. */
 	bool neg = (a < 0) != (b < 0);
-	uint64_t ua = (uint64_t)(a < 0 ? -a : a), ub = (uint64_t)(b < 0 ? -b : b);
+	uint64_t ua = a < 0 ? 0u - (uint64_t)a : (uint64_t)a;
+	uint64_t ub = b < 0 ? 0u - (uint64_t)b : (uint64_t)b;
+#ifdef __SIZEOF_INT128__
+	unsigned __int128 p = ((unsigned __int128)ua * ub + ((unsigned __int128)1 << 31)) >> 32;
+	if (p > (unsigned __int128)INT64_MAX)
+		return neg ? INT64_MIN : INT64_MAX;
+	uint64_t r = (uint64_t)p;
+#else
 	uint64_t ah = ua >> 32, al = ua & 0xffffffffu, bh = ub >> 32, bl = ub & 0xffffffffu;
 	uint64_t hh = ah * bh, mid1 = ah * bl, mid2 = al * bh, ll = al * bl;
 	/* result = hh<<32 + mid1 + mid2 + ll>>32 (+ rounding) */
@@ -30,6 +39,7 @@ q32_t fx_mul(q32_t a, q32_t b)
 	if (r + low < r || (r + low) >> 63)
 		return neg ? INT64_MIN : INT64_MAX;
 	r += low;
+#endif
 	return neg ? -(int64_t)r : (int64_t)r;
 }
 

@@ -233,6 +233,11 @@ static q32_t cruise_line_len(motion_t *m, uint8_t i)
 static void backward_pass(motion_t *m)
 {
 	q32_t next_v = 0;
+	for (uint8_t i = 0; i < m->q_count; i++) {
+		motion_cmd_t *c = q_at(m, i);
+		if (c->kind == MCMD_CRUISE && c->start_known)
+			c->line_mm = cruise_line_len(m, i);
+	}
 	for (int i = (int)m->q_count - 1; i >= 0; i--) {
 		motion_cmd_t *c = q_at(m, (uint8_t)i);
 		if (c->kind != MCMD_CRUISE || !c->has_corner) {
@@ -243,7 +248,7 @@ static void backward_pass(motion_t *m)
 		}
 		q32_t v = corner_cap(m, c);
 		if ((uint8_t)(i + 1) < m->q_count) {
-			q32_t reach = traj_reach(cruise_line_len(m, (uint8_t)(i + 1)), next_v, m->a_t_pt2);
+			q32_t reach = traj_reach(q_at(m, (uint8_t)(i + 1))->line_mm, next_v, m->a_t_pt2);
 			if (reach < v)
 				v = reach;
 		}
@@ -557,6 +562,7 @@ static bool next_piece(motion_t *m)
 					c->start_known = true;
 					if (m->q_count >= 2)
 						plan_corner(m, 0);
+					backward_pass(m);
 				}
 				if (m->v > 0)
 					continue; /* arriving out of a corner, already aligned */
@@ -669,7 +675,7 @@ static q32_t piece_horizon(motion_t *m, q32_t a)
 		return rem + traj_brake_dist(c->vend_pt, a) + c->vend_pt;
 	if (g->kind == SEG_CORNER && m->q_count >= 2) {
 		motion_cmd_t *n = q_at(m, 1);
-		q32_t after = cruise_line_len(m, 1);
+		q32_t after = n->line_mm;
 		q32_t nv = (n->kind == MCMD_CRUISE && n->has_corner) ? n->vend_pt : 0;
 		return rem + after + traj_brake_dist(nv, a) + nv;
 	}

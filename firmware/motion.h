@@ -65,6 +65,7 @@ typedef struct {
 	q32_t angle_deg;     /* TURN / ARC sweep, signed, unwrapped */
 	q32_t sx_mm, sy_mm;  /* CRUISE: start of the incoming line; ARC: centre, body frame */
 	q32_t vend_pt;       /* CRUISE: planned speed through the corner */
+	q32_t line_mm;       /* CRUISE: length of its straight part (cached) */
 	traj_corner_t corner;
 } motion_cmd_t;
 

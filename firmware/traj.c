@@ -110,10 +110,11 @@ bool traj_corner_plan(traj_corner_t *c, q32_t phi_deg, q32_t t_avail_mm, q32_t a
 	if (c->lh_mm <= 0)
 		return false;
 	c->k_mm_deg = fx_div(c->lh_mm, aphi);
-	/* sqrt(ar / (2 phi)) in 1/tick, Q32 */
-	q32_t ratio_q32 = fx_div(ar_pt2, 2 * aphi);
-	q32_t rt = ratio_q32 < ((q32_t)1 << 31) ? (q32_t)fx_isqrt64((uint64_t)ratio_q32 << 32)
-						  : (q32_t)fx_isqrt64((uint64_t)ratio_q32) << 16;
+	c->inv_lh = (q32_t)(((uint64_t)1 << 62) / (uint64_t)c->lh_mm);
+	/* sqrt(ar / (2 phi)) in 1/tick, Q32. The ratio is tiny (1e-6 at 1 kHz):
+	 * form it with 24 extra fraction bits before the square root. */
+	q32_t ratio_q56 = fx_div(ar_pt2 << 24, 2 * aphi);
+	q32_t rt = (q32_t)(fx_isqrt64((uint64_t)ratio_q56) << 4);
 	c->vacc_pt = fx_mul(c->lh_mm, rt);
 	c->acc_pt2 = fx_mul(ar_pt2, c->k_mm_deg) / 2;
 	return true;
@@ -127,12 +128,12 @@ q32_t traj_corner_heading(const traj_corner_t *c, q32_t s)
 		return 0;
 	if (s >= 2 * lh)
 		return c->phi_deg;
-	if (s <= lh) {
-		int64_t u = fx_div(s, lh) >> 2; /* Q30 */
-		int32_t u2 = (int32_t)((u * u) >> 30);
-		return fx_mul_q30(psi, u2);
-	}
-	int64_t u = fx_div(2 * lh - s, lh) >> 2;
+	/* u = s / Lh (Q30) by the reciprocal: no division on the tick path. */
+	bool second = s > lh;
+	int64_t u = fx_mul(second ? 2 * lh - s : s, c->inv_lh);
+	if (u > FX_Q30_ONE)
+		u = FX_Q30_ONE;
 	int32_t u2 = (int32_t)((u * u) >> 30);
-	return c->phi_deg - fx_mul_q30(psi, u2);
+	q32_t th = fx_mul_q30(psi, u2);
+	return second ? c->phi_deg - th : th;
 }

@@ -77,6 +77,7 @@ typedef struct {
 	q32_t k_mm_deg;  /* Lh / |phi|: speed cap per unit rotation rate */
 	q32_t vacc_pt;   /* Lh sqrt(ar / (2 |phi|)): speed cap from rotational acceleration */
 	q32_t acc_pt2;   /* ar Lh / (2 |phi|): path acceleration cap in the corner */
+	q32_t inv_lh;    /* 2^62 / Lh (raw): s * inv_lh >> 32 is s / Lh in Q30 */
 } traj_corner_t;
 
 /* Plans a corner: returns false when no blend is possible (deflection too
