@@ -62,8 +62,55 @@ void motion_set_jog_timeout_ms(motion_t *m, uint32_t ms)
 
 void motion_set_caution(motion_t *m, q32_t vt_cap) { m->cap_t_pt = vt_cap / m->p.tick_hz; }
 
+/* Rigid transform taking the reference pose onto a redefined pose: every
+ * point the engine holds is mapped through it, so the active piece and the
+ * queued targets keep their physical places and no velocity step appears. */
+typedef struct {
+	q32_t ox, oy, nx, ny, dth;
+	int32_t c, s;
+} frame_map_t;
+
+static void map_point(const frame_map_t *f, q32_t *x, q32_t *y)
+{
+	q32_t rx = *x - f->ox, ry = *y - f->oy;
+	*x = f->nx + fx_mul_q30(rx, f->c) - fx_mul_q30(ry, f->s);
+	*y = f->ny + fx_mul_q30(rx, f->s) + fx_mul_q30(ry, f->c);
+}
+
+static void map_pose(const frame_map_t *f, fx_pose_t *p)
+{
+	map_point(f, &p->x_mm, &p->y_mm);
+	p->th_deg = fx_wrap_deg(p->th_deg + f->dth);
+}
+
+static void map_dir(const frame_map_t *f, int32_t *ux, int32_t *uy)
+{
+	int64_t x = *ux, y = *uy;
+	*ux = (int32_t)(fx_mul_q30(x, f->c) - fx_mul_q30(y, f->s));
+	*uy = (int32_t)(fx_mul_q30(x, f->s) + fx_mul_q30(y, f->c));
+}
+
 void motion_set_pose(motion_t *m, const fx_pose_t *p)
 {
+	frame_map_t f = {.ox = m->ref.x_mm, .oy = m->ref.y_mm, .nx = p->x_mm, .ny = p->y_mm};
+	f.dth = fx_wrap_deg(p->th_deg - m->ref.th_deg);
+	uint32_t b = fx_deg_to_bam(f.dth);
+	f.c = fx_cos_bam(b);
+	f.s = fx_sin_bam(b);
+	for (uint8_t i = 0; i < m->q_count; i++) {
+		motion_cmd_t *c = q_at(m, i);
+		map_pose(&f, &c->target);
+		map_point(&f, &c->cx_mm, &c->cy_mm);
+		if (c->kind == MCMD_CRUISE)
+			map_point(&f, &c->sx_mm, &c->sy_mm);
+	}
+	if (m->seg.kind != SEG_NONE) {
+		map_pose(&f, &m->seg.p0);
+		map_pose(&f, &m->seg.p_end);
+		map_point(&f, &m->seg.cx, &m->seg.cy);
+		map_dir(&f, &m->seg.ux, &m->seg.uy);
+	}
+	map_pose(&f, &m->goal);
 	m->ref = *p;
 	m->ref.th_deg = fx_wrap_deg(p->th_deg);
 }

@@ -244,6 +244,30 @@ static void test_arc_quarter(void **state)
 	assert_false(motion_circular_rel(&r.m, q(10), q(1000), q(90)));
 }
 
+
+/* Redefining the pose mid-move keeps the motion's physical course: no
+ * velocity step, and the end lands where it would have, in the new frame. */
+static void test_set_pose_while_moving(void **state)
+{
+	(void)state;
+	rig_t r;
+	rig_init(&r, MOTION_KIN_DIFF);
+	assert_true(motion_forward(&r.m, q(2000)));
+	for (int i = 0; i < 1500; i++)
+		rig_tick(&r);
+	double x_before = d(r.m.ref.x_mm);
+	/* New frame: the unit is now at (100, 200) heading 90. */
+	fx_pose_t np = {q(100), q(200), q(90)};
+	motion_set_pose(&r.m, &np);
+	run_until_idle(&r, 30000);
+	assert_true(r.ax_max <= 500.0 * 1.0000001);
+	assert_true(r.aw_max == 0.0);
+	/* 2000 - x_before further along the new heading (+y). */
+	assert_true(fabs(d(r.m.ref.x_mm) - 100.0) < 1e-6);
+	assert_true(fabs(d(r.m.ref.y_mm) - (200.0 + 2000.0 - x_before)) < 1e-6);
+	assert_true(fabs(d(r.m.ref.th_deg) - 90.0) < 1e-6);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -256,6 +280,7 @@ int main(void)
 		cmocka_unit_test(test_pause_resume_stop),
 		cmocka_unit_test(test_omni_linear),
 		cmocka_unit_test(test_arc_quarter),
+		cmocka_unit_test(test_set_pose_while_moving),
 	};
 	return cmocka_run_group_tests_name("motion", tests, NULL, NULL);
 }
