@@ -71,29 +71,28 @@ uint64_t fx_isqrt64(uint64_t v)
 	return res;
 }
 
-/* Taylor series on |x| <= pi/4 (Q30 radians): the first omitted terms are
- * below 2e-9, the size of two Q30 steps. */
+/* Taylor series on |x| <= pi/4 (Q30 radians), Horner form with Q30
+ * coefficients: the first omitted terms are below 2e-9 (two Q30 steps). */
 static int32_t sin_poly(int64_t x)
 {
 	int64_t x2 = (x * x) >> 30;
-	int64_t t = FX_Q30_ONE;
-	t = FX_Q30_ONE - ((x2 * t) >> 30) / 72;
-	t = FX_Q30_ONE - ((x2 * t) >> 30) / 42;
-	t = FX_Q30_ONE - ((x2 * t) >> 30) / 20;
-	t = FX_Q30_ONE - ((x2 * t) >> 30) / 6;
-	return (int32_t)((x * t) >> 30);
+	int64_t p = 2959;                   /* 1/9! */
+	p = -213044 + ((x2 * p) >> 30);     /* -1/7! */
+	p = 8947849 + ((x2 * p) >> 30);     /* 1/5! */
+	p = -178956971 + ((x2 * p) >> 30);  /* -1/3! */
+	p = FX_Q30_ONE + ((x2 * p) >> 30);
+	return (int32_t)((x * p) >> 30);
 }
 
 static int32_t cos_poly(int64_t x)
 {
 	int64_t x2 = (x * x) >> 30;
-	int64_t t = FX_Q30_ONE;
-	t = FX_Q30_ONE - ((x2 * t) >> 30) / 90;
-	t = FX_Q30_ONE - ((x2 * t) >> 30) / 56;
-	t = FX_Q30_ONE - ((x2 * t) >> 30) / 30;
-	t = FX_Q30_ONE - ((x2 * t) >> 30) / 12;
-	t = FX_Q30_ONE - ((x2 * t) >> 30) / 2;
-	return (int32_t)t;
+	int64_t p = -296;                   /* -1/10! */
+	p = 26630 + ((x2 * p) >> 30);       /* 1/8! */
+	p = -1491308 + ((x2 * p) >> 30);    /* -1/6! */
+	p = 44739243 + ((x2 * p) >> 30);    /* 1/4! */
+	p = -536870912 + ((x2 * p) >> 30);  /* -1/2! */
+	return (int32_t)(FX_Q30_ONE + ((x2 * p) >> 30));
 }
 
 #define HALF_PI_Q30 1686629713LL /* pi/2 * 2^30 */

@@ -90,6 +90,11 @@ void kin_step(kin_t *k, const fx_twist_t *body, const int32_t meas[], int32_t ou
 
 void odom_integrate(fx_pose_t *pose, const fx_twist_t *d)
 {
+	if (d->vx_pt == 0 && d->vy_pt == 0) {
+		if (d->w_pt != 0)
+			pose->th_deg = fx_wrap_deg(pose->th_deg + d->w_pt);
+		return;
+	}
 	uint32_t mid = fx_deg_to_bam(pose->th_deg + d->w_pt / 2);
 	int32_t c = fx_cos_bam(mid), s = fx_sin_bam(mid);
 	pose->x_mm += fx_mul_q30(d->vx_pt, c) - fx_mul_q30(d->vy_pt, s);

@@ -847,6 +847,15 @@ static void path_tick(motion_t *m, fx_twist_t *out)
 				*out = (fx_twist_t){.vx_pt = m->seg.dir * budget};
 				return;
 			}
+			if (m->seg.kind == SEG_CORNER && m->p.kin == MOTION_KIN_DIFF &&
+			    m->seg.s != budget) {
+				/* Path length at the heading change of the step; the
+				 * odometry integrates it at the midpoint heading, as the
+				 * corner's own integration does. */
+				*out = (fx_twist_t){.vx_pt = budget,
+						    .w_pt = fx_wrap_deg(m->ref.th_deg - start.th_deg)};
+				return;
+			}
 			if (m->seg.kind == SEG_TURN && m->seg.s != budget) {
 				*out = (fx_twist_t){.w_pt = m->seg.dir * budget};
 				return;

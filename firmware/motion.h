@@ -19,7 +19,9 @@
 #include "fx.h"
 #include "traj.h"
 
+#ifndef MOTION_QUEUE_LEN /* the MCU build sets a shorter queue */
 #define MOTION_QUEUE_LEN 32
+#endif
 
 typedef struct {
 	q32_t x_mm, y_mm, th_deg; /* th wrapped to [-180, 180) */

@@ -81,11 +81,9 @@ __attribute__((format(printf, 2, 3))) static void rb_printf(rbuf_t *r, const cha
  * -0.000. */
 static void rb_double(rbuf_t *r, double v)
 {
-	char tmp[400];
-	int n = snprintf(tmp, sizeof(tmp), "%.3f", v);
+	char tmp[NP_FIXED3_MAX];
 
-	if (n <= 0)
-		return;
+	np_fmt_fixed3(v, tmp);
 	if (strcmp(tmp, "-0.000") == 0)
 		rb_puts(r, "0.000");
 	else

@@ -1,8 +1,10 @@
-/* Strict number and boolean parsing for the console (see numparse.h). */
+/* Strict number and boolean parsing for the console, and its number
+ * formatting (see numparse.h). No libc number conversion: the same code runs
+ * on the host and on the MCU, where strtod and printf's %f would cost more
+ * flash than the rest of the console. */
 #include "numparse.h"
 
-#include <math.h>
-#include <stdlib.h>
+#include <string.h>
 
 /* Exponents are saturated here: far beyond any representable double or
  * integer, and small enough that digit counts added to it never overflow. */
@@ -66,26 +68,75 @@ static bool np_scan(const char *s, np_dec_t *d)
 	return *p == '\0';
 }
 
-np_result_t np_parse_double(const char *s, double *out)
-{
-	np_dec_t d;
-	char *end;
-	double v;
-
-	if (!np_scan(s, &d))
-		return NP_SYNTAX;
-	/* The grammar above is a subset of strtod's, which rounds correctly. */
-	v = strtod(s, &end);
-	if (*end != '\0' || !isfinite(v))
-		return NP_SYNTAX;
-	*out = v;
-	return NP_OK;
-}
-
 /* Digit k of the concatenated integer and fraction digits. */
 static int dec_digit(const np_dec_t *d, long k)
 {
 	return k < d->in ? d->ip[k] - '0' : d->fp[k - d->in] - '0';
+}
+
+/* 10^0 .. 10^22: every one is exactly a double. */
+static const double pow10_exact[23] = {
+    1e0,  1e1,	1e2,  1e3,  1e4,  1e5,	1e6,  1e7,  1e8,  1e9,	1e10, 1e11,
+    1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+};
+
+#define NP_2P53 (UINT64_C(1) << 53)
+
+static bool np_finite(double v)
+{
+	uint64_t b;
+
+	memcpy(&b, &v, sizeof(b));
+	return ((b >> 52) & 0x7ffu) != 0x7ffu;
+}
+
+np_result_t np_parse_double(const char *s, double *out)
+{
+	np_dec_t d;
+	long n, k, first, used, e10;
+	uint64_t w = 0;
+	double v;
+
+	if (!np_scan(s, &d))
+		return NP_SYNTAX;
+	/* value = w * 10^e10, w the first (up to) 19 significant digits. */
+	n = d.in + d.fn;
+	for (first = 0; first < n && dec_digit(&d, first) == 0; first++)
+		;
+	used = n - first > 19 ? 19 : n - first;
+	for (k = first; k < first + used; k++)
+		w = w * 10u + (uint64_t)dec_digit(&d, k);
+	/* digits after the 19th only lower the precision, not the scale */
+	e10 = d.exp - d.fn + (n - first - used);
+	if (w == 0) {
+		v = 0.0;
+	} else if (w <= NP_2P53 && e10 >= -22 && e10 <= 22 && used == n - first) {
+		/* Both operands exact: one correctly rounded operation. */
+		v = (double)w;
+		v = e10 < 0 ? v / pow10_exact[-e10] : v * pow10_exact[e10];
+	} else {
+		/* Outside the exact range (more than 15-16 significant digits,
+		 * or |exponent| > 22): a few roundings in a row, within a few
+		 * units in the last place, and rounded to zero or infinity at
+		 * the ends of the range. */
+		v = (double)w;
+		while (e10 > 0 && np_finite(v)) {
+			long step = e10 > 22 ? 22 : e10;
+
+			v *= pow10_exact[step];
+			e10 -= step;
+		}
+		while (e10 < 0 && v != 0.0) {
+			long step = -e10 > 22 ? 22 : -e10;
+
+			v /= pow10_exact[step];
+			e10 += step;
+		}
+	}
+	if (!np_finite(v))
+		return NP_SYNTAX;
+	*out = d.neg ? -v : v;
+	return NP_OK;
 }
 
 np_result_t np_parse_int(const char *s, int64_t min, int64_t max, int64_t *out)
@@ -165,4 +216,123 @@ bool np_parse_bool(const char *s, bool *out)
 		}
 	}
 	return false;
+}
+
+/* Writes v's decimal digits backwards ending at end; returns the start. */
+static char *put_u64_rev(char *end, uint64_t v)
+{
+	do {
+		*--end = (char)('0' + v % 10u);
+		v /= 10u;
+	} while (v);
+	return end;
+}
+
+size_t np_fmt_u64(uint64_t v, char *buf)
+{
+	char tmp[NP_INT_MAX];
+	char *p = put_u64_rev(tmp + sizeof(tmp), v);
+	size_t n = (size_t)(tmp + sizeof(tmp) - p);
+
+	memcpy(buf, p, n);
+	buf[n] = '\0';
+	return n;
+}
+
+size_t np_fmt_i64(int64_t v, char *buf)
+{
+	if (v >= 0)
+		return np_fmt_u64((uint64_t)v, buf);
+	buf[0] = '-';
+	return 1 + np_fmt_u64(-(uint64_t)v, buf + 1);
+}
+
+/* An integer m * 2^e2 of up to 309 digits, exactly: base 10^9 limbs. */
+static size_t fmt_big(uint64_t m, int e2, char *buf)
+{
+	uint32_t limb[35];
+	size_t nl = 0, n;
+
+	while (m) {
+		limb[nl++] = (uint32_t)(m % 1000000000u);
+		m /= 1000000000u;
+	}
+	while (e2 > 0) {
+		int s = e2 > 32 ? 32 : e2;
+		uint64_t carry = 0;
+
+		for (size_t i = 0; i < nl; i++) {
+			uint64_t t = ((uint64_t)limb[i] << s) + carry;
+
+			limb[i] = (uint32_t)(t % 1000000000u);
+			carry = t / 1000000000u;
+		}
+		while (carry) {
+			limb[nl++] = (uint32_t)(carry % 1000000000u);
+			carry /= 1000000000u;
+		}
+		e2 -= s;
+	}
+	n = np_fmt_u64(limb[nl - 1], buf);
+	for (size_t i = nl - 1; i-- > 0;) {
+		uint32_t l = limb[i];
+
+		for (int k = 8; k >= 0; k--) {
+			buf[n + (size_t)k] = (char)('0' + l % 10u);
+			l /= 10u;
+		}
+		n += 9;
+	}
+	return n;
+}
+
+size_t np_fmt_fixed3(double v, char *buf)
+{
+	uint64_t b, m, q = 0;
+	int ex, e2;
+	size_t n = 0;
+
+	memcpy(&b, &v, sizeof(b));
+	ex = (int)((b >> 52) & 0x7ffu);
+	m = b & (NP_2P53 / 2u - 1u);
+	if (b >> 63)
+		buf[n++] = '-';
+	if (ex == 0x7ff) {
+		memcpy(buf + n, m ? "nan" : "inf", 4);
+		return n + 3;
+	}
+	/* v = m * 2^e2 exactly */
+	if (ex)
+		m |= NP_2P53 / 2u;
+	e2 = (ex ? ex : 1) - 1075;
+	if (e2 > 10) {
+		n += fmt_big(m, e2, buf + n);
+		memcpy(buf + n, ".000", 5);
+		return n + 4;
+	}
+	if (e2 >= 0) {
+		/* an integer below 2^63 */
+		n += np_fmt_u64(m << e2, buf + n);
+		memcpy(buf + n, ".000", 5);
+		return n + 4;
+	}
+	if (e2 > -64) {
+		/* m * 1000 < 2^63: thousandths, rounded to nearest, ties to
+		 * even (the rounding of printf's "%.3f"). */
+		unsigned k = (unsigned)-e2;
+		uint64_t t = m * 1000u, r = t & ((UINT64_C(1) << k) - 1u);
+		uint64_t half = UINT64_C(1) << (k - 1u);
+
+		q = t >> k;
+		if (r > half || (r == half && (q & 1u)))
+			q++;
+	}
+	/* else below 2^-64 * 2^63: less than half a thousandth, q = 0 */
+	n += np_fmt_u64(q / 1000u, buf + n);
+	buf[n++] = '.';
+	buf[n++] = (char)('0' + q / 100u % 10u);
+	buf[n++] = (char)('0' + q / 10u % 10u);
+	buf[n++] = (char)('0' + q % 10u);
+	buf[n] = '\0';
+	return n;
 }

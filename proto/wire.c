@@ -219,7 +219,11 @@ static int get_value(win_t *in, char type, cmd_value_t *v, unsigned field, wire_
 		in->pos += 8;
 		return WIRE_ST_OK;
 	case CMD_T_STRING: {
-		int r = get_str(in, st->str[field], WIRE_STR_MAX);
+		int r;
+
+		if (!st)
+			return WIRE_ST_VALUE;
+		r = get_str(in, st->str[field], WIRE_STR_MAX);
 
 		v->s = st->str[field];
 		return r;
@@ -227,6 +231,8 @@ static int get_value(win_t *in, char type, cmd_value_t *v, unsigned field, wire_
 	case CMD_T_ALARMS: {
 		uint8_t n;
 
+		if (!st)
+			return WIRE_ST_VALUE;
 		if (!avail(in, 1))
 			return WIRE_ST_LENGTH;
 		n = in->buf[in->pos++];
@@ -325,9 +331,10 @@ size_t wire_info(uint8_t *buf)
 size_t wire_dispatch(vehicle_t *v, unsigned opcode, const uint8_t *req, size_t len, uint8_t *resp,
 		     size_t cap, int *status)
 {
-	/* Static: the alarm and string buffers are too large for a small
-	 * firmware stack, and the dispatcher is never re-entered. */
-	static wire_store_t store;
+	/* No operation takes a string or an alarm sequence in, so requests
+	 * decode without a wire_store_t (1.9 kB); one that did would be refused
+	 * with WIRE_ST_VALUE, never run. The out scratch is static: too large
+	 * for a small firmware stack, and the dispatcher is never re-entered. */
 	static cmd_scratch_t scratch;
 	cmd_value_t in[CMD_MAX_FIELDS], out[CMD_MAX_FIELDS];
 	const cmd_def_t *d;
@@ -351,7 +358,7 @@ size_t wire_dispatch(vehicle_t *v, unsigned opcode, const uint8_t *req, size_t l
 		*status = WIRE_ST_OPCODE;
 		return 0;
 	}
-	*status = wire_decode_request(d, req, len, in, &store);
+	*status = wire_decode_request(d, req, len, in, NULL);
 	if (*status != WIRE_ST_OK)
 		return 0;
 	r = cmd_invoke(v, d, in, out, &scratch);

@@ -79,7 +79,8 @@ int wire_encode(const char *types, unsigned n, const cmd_value_t v[], uint8_t *b
 		size_t *len);
 /* Decodes exactly len bytes into n values. Returns WIRE_ST_OK,
  * WIRE_ST_LENGTH (short or trailing bytes) or WIRE_ST_VALUE. Strings are
- * NUL-terminated copies in st; an embedded NUL is WIRE_ST_VALUE. */
+ * NUL-terminated copies in st; an embedded NUL is WIRE_ST_VALUE. st may be
+ * NULL: then a string or alarm field is WIRE_ST_VALUE. */
 int wire_decode(const char *types, unsigned n, const uint8_t *buf, size_t len, cmd_value_t v[],
 		wire_store_t *st);
 
