@@ -2,47 +2,6 @@
  * runs on a Cortex-M), integer square root, trigonometry. */
 #include "fx.h"
 
-int64_t fx_mul_q30(int64_t a, int32_t b_q30)
-{
-	/* a = hi * 2^32 + lo, lo unsigned; each partial product fits in 64 bits. */
-	int64_t hi = a >> 32;
-	int64_t lo = (int64_t)(uint32_t)(uint64_t)a;
-	int64_t p_hi = hi * b_q30;
-	int64_t p_lo = lo * b_q30;
-	return p_hi * 4 + ((p_lo + ((int64_t)1 << 29)) >> 30);
-}
-
-q32_t fx_mul(q32_t a, q32_t b)
-{
-	/* Magnitudes, rounded half away from zero, so every build (with or
-	 * without 128-bit integers) produces the same bits. */
-	bool neg = (a < 0) != (b < 0);
-	uint64_t ua = a < 0 ? 0u - (uint64_t)a : (uint64_t)a;
-	uint64_t ub = b < 0 ? 0u - (uint64_t)b : (uint64_t)b;
-#ifdef __SIZEOF_INT128__
-	unsigned __int128 p = ((unsigned __int128)ua * ub + ((unsigned __int128)1 << 31)) >> 32;
-	if (p > (unsigned __int128)INT64_MAX)
-		return neg ? INT64_MIN : INT64_MAX;
-	uint64_t r = (uint64_t)p;
-#else
-	uint64_t ah = ua >> 32, al = ua & 0xffffffffu, bh = ub >> 32, bl = ub & 0xffffffffu;
-	uint64_t hh = ah * bh, mid1 = ah * bl, mid2 = al * bh, ll = al * bl;
-	/* result = hh<<32 + mid1 + mid2 + ll>>32 (+ rounding) */
-	if (hh >> 31)
-		return neg ? INT64_MIN : INT64_MAX;
-	uint64_t r = (hh << 32);
-	uint64_t add = mid1 + mid2;
-	if (add < mid1 || r + add < r)
-		return neg ? INT64_MIN : INT64_MAX;
-	r += add;
-	uint64_t low = (ll >> 32) + ((ll >> 31) & 1u);
-	if (r + low < r || (r + low) >> 63)
-		return neg ? INT64_MIN : INT64_MAX;
-	r += low;
-#endif
-	return neg ? -(int64_t)r : (int64_t)r;
-}
-
 int64_t fx_muldiv(int64_t a, int64_t num, int64_t den)
 {
 	bool neg = (a < 0) != (num < 0);
@@ -121,24 +80,6 @@ int32_t fx_sin_bam(uint32_t bam)
 }
 
 int32_t fx_cos_bam(uint32_t bam) { return fx_sin_bam(bam + (1u << 30)); }
-
-q32_t fx_wrap_deg(q32_t deg)
-{
-	if (deg >= -FX_DEG_180 && deg < FX_DEG_180)
-		return deg;
-	q32_t r = (deg + FX_DEG_180) % FX_DEG_360;
-	if (r < 0)
-		r += FX_DEG_360;
-	return r - FX_DEG_180;
-}
-
-uint32_t fx_deg_to_bam(q32_t deg)
-{
-	q32_t w = fx_wrap_deg(deg);
-	/* deg * 2^32 / 360 in Q32 degrees is w / 360, rounded. */
-	int64_t b = (w >= 0 ? w + 180 : w - 180) / 360;
-	return (uint32_t)(int32_t)b;
-}
 
 /* atan(2^-i) in Q32 degrees. */
 static const int64_t cordic_atan_deg[32] = {

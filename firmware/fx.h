@@ -29,10 +29,8 @@ static inline q32_t fx_from_int(int32_t v) { return (q32_t)((uint64_t)(int64_t)v
 
 /* (a * b) >> 30 for a Q32 (or any int64) and a Q30 factor, rounded to nearest,
  * without a 128-bit intermediate (two 32x32->64 products, cheap on Cortex-M4). */
-int64_t fx_mul_q30(int64_t a, int32_t b_q30);
 
 /* (a * b) >> 32 for two Q32 values, rounded to nearest; saturates on overflow. */
-q32_t fx_mul(q32_t a, q32_t b);
 
 /* a * num / den with a 64-bit numerator product guarded: exact when |a*num|
  * fits in 63 bits, otherwise computed in two steps. den > 0. Rounds toward 0. */
@@ -47,7 +45,6 @@ int32_t fx_sin_bam(uint32_t bam);
 int32_t fx_cos_bam(uint32_t bam);
 
 /* Degrees (Q32) to binary angle, modulo one turn. */
-uint32_t fx_deg_to_bam(q32_t deg);
 
 /* atan2(y, x) as Q32 degrees in [-180, 180). y and x in any common scale. */
 q32_t fx_atan2_deg(int64_t y, int64_t x);
@@ -56,7 +53,6 @@ q32_t fx_atan2_deg(int64_t y, int64_t x);
 q32_t fx_hypot(q32_t x, q32_t y);
 
 /* Wrap a Q32 angle in degrees into [-180, 180). */
-q32_t fx_wrap_deg(q32_t deg);
 
 static inline int64_t fx_abs64(int64_t v) { return v < 0 ? -v : v; }
 static inline int64_t fx_min64(int64_t a, int64_t b) { return a < b ? a : b; }
@@ -64,6 +60,66 @@ static inline int64_t fx_max64(int64_t a, int64_t b) { return a > b ? a : b; }
 static inline int64_t fx_clamp64(int64_t v, int64_t lo, int64_t hi)
 {
 	return v < lo ? lo : (v > hi ? hi : v);
+}
+
+/* The hot helpers are inline: the control tick calls them dozens of times. */
+static inline int64_t fx_mul_q30(int64_t a, int32_t b_q30)
+{
+	/* a = hi * 2^32 + lo, lo unsigned; each partial product fits in 64 bits. */
+	int64_t hi = a >> 32;
+	int64_t lo = (int64_t)(uint32_t)(uint64_t)a;
+	int64_t p_hi = hi * b_q30;
+	int64_t p_lo = lo * b_q30;
+	return p_hi * 4 + ((p_lo + ((int64_t)1 << 29)) >> 30);
+}
+
+static inline q32_t fx_mul(q32_t a, q32_t b)
+{
+	/* Magnitudes, rounded half away from zero, so every build (with or
+	 * without 128-bit integers) produces the same bits. */
+	bool neg = (a < 0) != (b < 0);
+	uint64_t ua = a < 0 ? 0u - (uint64_t)a : (uint64_t)a;
+	uint64_t ub = b < 0 ? 0u - (uint64_t)b : (uint64_t)b;
+#ifdef __SIZEOF_INT128__
+	unsigned __int128 p = ((unsigned __int128)ua * ub + ((unsigned __int128)1 << 31)) >> 32;
+	if (p > (unsigned __int128)INT64_MAX)
+		return neg ? INT64_MIN : INT64_MAX;
+	uint64_t r = (uint64_t)p;
+#else
+	uint64_t ah = ua >> 32, al = ua & 0xffffffffu, bh = ub >> 32, bl = ub & 0xffffffffu;
+	uint64_t hh = ah * bh, mid1 = ah * bl, mid2 = al * bh, ll = al * bl;
+	/* result = hh<<32 + mid1 + mid2 + ll>>32 (+ rounding) */
+	if (hh >> 31)
+		return neg ? INT64_MIN : INT64_MAX;
+	uint64_t r = (hh << 32);
+	uint64_t add = mid1 + mid2;
+	if (add < mid1 || r + add < r)
+		return neg ? INT64_MIN : INT64_MAX;
+	r += add;
+	uint64_t low = (ll >> 32) + ((ll >> 31) & 1u);
+	if (r + low < r || (r + low) >> 63)
+		return neg ? INT64_MIN : INT64_MAX;
+	r += low;
+#endif
+	return neg ? -(int64_t)r : (int64_t)r;
+}
+
+static inline q32_t fx_wrap_deg(q32_t deg)
+{
+	if (deg >= -FX_DEG_180 && deg < FX_DEG_180)
+		return deg;
+	q32_t r = (deg + FX_DEG_180) % FX_DEG_360;
+	if (r < 0)
+		r += FX_DEG_360;
+	return r - FX_DEG_180;
+}
+
+static inline uint32_t fx_deg_to_bam(q32_t deg)
+{
+	q32_t w = fx_wrap_deg(deg);
+	/* deg * 2^32 / 360 in Q32 degrees is w / 360, rounded. */
+	int64_t b = (w >= 0 ? w + 180 : w - 180) / 360;
+	return (uint32_t)(int32_t)b;
 }
 
 #endif

@@ -43,6 +43,9 @@ int sockcan_open(sockcan_t *s, const char *ifname, const uint32_t *ids, size_t n
 			       (socklen_t)(n * sizeof(flt[0]))) < 0)
 			goto fail;
 	}
+	/* The kernel counts frames it dropped for a full receive buffer. */
+	int on = 1;
+	(void)setsockopt(fd, SOL_SOCKET, SO_RXQ_OVFL, &on, sizeof(on));
 	memset(&addr, 0, sizeof(addr));
 	addr.can_family = AF_CAN;
 	addr.can_ifindex = ifr.ifr_ifindex;
@@ -50,7 +53,7 @@ int sockcan_open(sockcan_t *s, const char *ifname, const uint32_t *ids, size_t n
 		goto fail;
 	s->fd = fd;
 	return 0;
-fail: {
+fail : {
 	int e = errno;
 	close(fd);
 	errno = e;
@@ -93,9 +96,18 @@ int sockcan_send(sockcan_t *s, const canlink_frame_t *f)
 int sockcan_recv(sockcan_t *s, canlink_frame_t *f)
 {
 	struct can_frame cf;
+	union {
+		char buf[CMSG_SPACE(sizeof(uint32_t))];
+		struct cmsghdr align;
+	} ctl;
 
 	for (;;) {
-		ssize_t r = read(s->fd, &cf, sizeof(cf));
+		struct iovec iov = {.iov_base = &cf, .iov_len = sizeof(cf)};
+		struct msghdr msg = {.msg_iov = &iov,
+				     .msg_iovlen = 1,
+				     .msg_control = ctl.buf,
+				     .msg_controllen = sizeof(ctl.buf)};
+		ssize_t r = recvmsg(s->fd, &msg, 0);
 		if (r < 0) {
 			if (errno == EINTR)
 				continue;
@@ -104,8 +116,11 @@ int sockcan_recv(sockcan_t *s, canlink_frame_t *f)
 			s->rx_errors++;
 			return -1;
 		}
-		if (r != (ssize_t)sizeof(cf) || (cf.can_id & (CAN_EFF_FLAG | CAN_RTR_FLAG |
-							      CAN_ERR_FLAG)) || cf.len > 8) {
+		for (struct cmsghdr *c = CMSG_FIRSTHDR(&msg); c; c = CMSG_NXTHDR(&msg, c))
+			if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SO_RXQ_OVFL)
+				memcpy(&s->rx_overflow, CMSG_DATA(c), sizeof(s->rx_overflow));
+		if (r != (ssize_t)sizeof(cf) ||
+		    (cf.can_id & (CAN_EFF_FLAG | CAN_RTR_FLAG | CAN_ERR_FLAG)) || cf.len > 8) {
 			s->rx_dropped++;
 			continue;
 		}

@@ -18,6 +18,7 @@ typedef struct {
 	int fd;
 	uint32_t tx_frames, tx_full, tx_errors;
 	uint32_t rx_frames, rx_dropped, rx_errors;
+	uint32_t rx_overflow; /* dropped by the kernel: receive buffer full (cumulative) */
 } sockcan_t;
 
 /* Opens and binds a raw CAN socket on ifname. When ids is not NULL the

@@ -329,8 +329,8 @@ static void handle_request(canlink_t *c, const uint8_t *req, size_t len)
 	c->have_last = false;
 	int status = WIRE_ST_OK;
 	size_t n = wire_dispatch(c->v, req[1], req + CANLINK_REQ_HDR, len - CANLINK_REQ_HDR,
-				 c->tx_buf + CANLINK_RESP_HDR,
-				 sizeof(c->tx_buf) - CANLINK_RESP_HDR, &status);
+				 c->tx_buf + CANLINK_RESP_HDR, sizeof(c->tx_buf) - CANLINK_RESP_HDR,
+				 &status);
 	if (status != WIRE_ST_OK) {
 		send_nak(c, req[0], req[1], status);
 		return;

@@ -45,24 +45,24 @@ typedef struct {
 } canlink_frame_t;
 
 /* Identifier bases; the node id is added. */
-#define CANLINK_ID_STATUS_A 0x180u
-#define CANLINK_ID_STATUS_B 0x280u
-#define CANLINK_ID_STATUS_C 0x380u
-#define CANLINK_ID_RESPONSE 0x580u
-#define CANLINK_ID_REQUEST 0x600u
-#define CANLINK_NODE_MIN 1
-#define CANLINK_NODE_MAX 127
+#define CANLINK_ID_STATUS_A  0x180u
+#define CANLINK_ID_STATUS_B  0x280u
+#define CANLINK_ID_STATUS_C  0x380u
+#define CANLINK_ID_RESPONSE  0x580u
+#define CANLINK_ID_REQUEST   0x600u
+#define CANLINK_NODE_MIN     1
+#define CANLINK_NODE_MAX     127
 #define CANLINK_NODE_DEFAULT 1
 
 /* PCI byte (data[0]) frame types. */
 #define CANLINK_PCI_SINGLE 0x00u
-#define CANLINK_PCI_FIRST 0x10u
-#define CANLINK_PCI_NEXT 0x20u
+#define CANLINK_PCI_FIRST  0x10u
+#define CANLINK_PCI_NEXT   0x20u
 
 /* Message headers. */
-#define CANLINK_REQ_HDR 2  /* seq, opcode */
+#define CANLINK_REQ_HDR	 2 /* seq, opcode */
 #define CANLINK_RESP_HDR 3 /* seq, opcode, status */
-#define CANLINK_REQ_MAX (CANLINK_REQ_HDR + WIRE_REQ_MAX)
+#define CANLINK_REQ_MAX	 (CANLINK_REQ_HDR + WIRE_REQ_MAX)
 #define CANLINK_RESP_MAX (CANLINK_RESP_HDR + WIRE_RESP_MAX)
 /* The 12-bit length of a first frame. */
 #define CANLINK_MSG_LIMIT 4095u
@@ -72,7 +72,7 @@ typedef struct {
 #define CANLINK_RX_TIMEOUT_US 250000u
 
 #define CANLINK_STATUS_HZ_DEFAULT 10
-#define CANLINK_STATUS_HZ_MAX 1000
+#define CANLINK_STATUS_HZ_MAX	  1000
 
 /* ---- segmentation, shared by the unit and the host --------------------- */
 
@@ -83,14 +83,14 @@ void canlink_seg_frame(const uint8_t *msg, size_t len, size_t i, uint32_t id, ca
 
 /* Reassembly of one message stream (one identifier). */
 typedef enum {
-	CANLINK_RX_PENDING = 0, /* frame taken, message not complete */
-	CANLINK_RX_DONE = 1,    /* a message is complete in buf[0..len) */
-	CANLINK_RX_BAD_DLC = -1,     /* DLC too short for its PCI, or zero */
-	CANLINK_RX_BAD_PCI = -2,     /* reserved frame type, length 0 or a first
-					frame for a message that fits a single */
-	CANLINK_RX_SEQUENCE = -3,    /* consecutive frame out of order or unexpected */
-	CANLINK_RX_OVERSIZE = -4,    /* first frame announces more than cap */
-	CANLINK_RX_DISCARDED = -5,   /* consecutive frame of a refused message */
+	CANLINK_RX_PENDING = 0,	   /* frame taken, message not complete */
+	CANLINK_RX_DONE = 1,	   /* a message is complete in buf[0..len) */
+	CANLINK_RX_BAD_DLC = -1,   /* DLC too short for its PCI, or zero */
+	CANLINK_RX_BAD_PCI = -2,   /* reserved frame type, length 0 or a first
+				      frame for a message that fits a single */
+	CANLINK_RX_SEQUENCE = -3,  /* consecutive frame out of order or unexpected */
+	CANLINK_RX_OVERSIZE = -4,  /* first frame announces more than cap */
+	CANLINK_RX_DISCARDED = -5, /* consecutive frame of a refused message */
 } canlink_rx_result_t;
 
 typedef struct {
@@ -98,7 +98,7 @@ typedef struct {
 	size_t cap;
 	size_t len, want;
 	uint8_t next_index;
-	bool active;     /* a first frame was taken, consecutive frames expected */
+	bool active;	 /* a first frame was taken, consecutive frames expected */
 	bool discarding; /* the message being sent was refused (oversize) */
 	uint32_t started_us;
 	uint32_t aborted; /* messages cut short by a new single or first frame */
@@ -118,14 +118,14 @@ bool canlink_rx_expired(canlink_rx_t *r, uint32_t now_us);
 typedef bool (*canlink_send_fn)(void *ctx, const canlink_frame_t *f);
 
 typedef struct {
-	uint8_t node;       /* CANLINK_NODE_MIN..MAX */
+	uint8_t node;	    /* CANLINK_NODE_MIN..MAX */
 	uint16_t status_hz; /* status frame rate, 0 = off, up to CANLINK_STATUS_HZ_MAX */
 } canlink_config_t;
 
 /* Counters, for diagnostics and the bad-input tests. */
 typedef struct {
-	uint32_t rx_frames;     /* frames with the request identifier */
-	uint32_t rx_foreign;    /* other identifiers, ignored */
+	uint32_t rx_frames;  /* frames with the request identifier */
+	uint32_t rx_foreign; /* other identifiers, ignored */
 	uint32_t rx_bad_dlc;
 	uint32_t rx_bad_pci;
 	uint32_t rx_sequence;
@@ -133,14 +133,14 @@ typedef struct {
 	uint32_t rx_aborted;
 	uint32_t rx_timeouts;
 	uint32_t rx_oversize;
-	uint32_t rx_short;      /* complete message shorter than seq + opcode */
-	uint32_t requests;      /* operations executed */
-	uint32_t replays;       /* retransmissions answered from the cache */
-	uint32_t naks;          /* responses with a non-zero status */
+	uint32_t rx_short; /* complete message shorter than seq + opcode */
+	uint32_t requests; /* operations executed */
+	uint32_t replays;  /* retransmissions answered from the cache */
+	uint32_t naks;	   /* responses with a non-zero status */
 	uint32_t tx_frames;
-	uint32_t tx_busy;       /* send refused, retried on the next poll */
-	uint32_t tx_abandoned;  /* response not finished when the next request came */
-	uint32_t status_sent;   /* status groups sent */
+	uint32_t tx_busy;	 /* send refused, retried on the next poll */
+	uint32_t tx_abandoned;	 /* response not finished when the next request came */
+	uint32_t status_sent;	 /* status groups sent */
 	uint32_t status_dropped; /* status groups (partly) not sent: queue full */
 } canlink_stats_t;
 
@@ -180,11 +180,11 @@ void canlink_poll(canlink_t *c, uint32_t now_us);
 /* The status frames' content, decoded (also used by the host). */
 typedef struct {
 	uint16_t state;
-	uint8_t alarms;  /* active alarm count, saturated at 255 */
-	uint8_t counter; /* +1 per status group */
+	uint8_t alarms;	     /* active alarm count, saturated at 255 */
+	uint8_t counter;     /* +1 per status group */
 	uint16_t battery_cV; /* getBatteryVoltage x 10: 0.01 V units */
 	int16_t vx_mm_s, vy_mm_s;
-	int16_t w_ddeg_s; /* 0.1 deg/s */
+	int16_t w_ddeg_s;     /* 0.1 deg/s */
 	int32_t x_dmm, y_dmm; /* 0.1 mm */
 	int32_t theta_mdeg;   /* 0.001 deg */
 } canlink_status_t;

@@ -33,12 +33,12 @@ typedef struct {
 	canlink_t link;
 	canlink_frame_t q[QN]; /* unit -> host */
 	size_t head, tail;
-	bool refuse;     /* the unit's transmit queue is full */
-	uint32_t sent;   /* frames the unit sent */
+	bool refuse;   /* the unit's transmit queue is full */
+	uint32_t sent; /* frames the unit sent */
 } unit_t;
 
-static unit_t U;     /* the unit on CAN */
-static sim_t T;      /* its twin, on the console */
+static unit_t U; /* the unit on CAN */
+static sim_t T;	 /* its twin, on the console */
 static vc_client_t C;
 static char rep[CONSOLE_REPLY_MAX];
 
@@ -278,8 +278,10 @@ static void test_every_op_matches_console(void **state)
 	    {"getServoStatus 7", "ok false false", 0},
 	    {"moveForward 100", "ok false", 0},
 	    {"getActiveAlarm 1", "ok true 2 1 121 warning \"moveForward refused: servo off\"", 0},
-	    {"getActiveAlarm 2", "ok true 2 2 121 warning \"moveForward refused: servo off\" "
-				 "127 warning \"getServoStatus refused: no such axis\"", 0},
+	    {"getActiveAlarm 2",
+	     "ok true 2 2 121 warning \"moveForward refused: servo off\" "
+	     "127 warning \"getServoStatus refused: no such axis\"",
+	     0},
 	    {"getActiveAlarm 0", "ok true 2 0", 0},
 	    {"clearAlarm", "ok true", 0},
 	    {"setServo true", "ok false", 0},
@@ -505,7 +507,8 @@ static void test_reassembly_errors(void **state)
 	f = frame(0x601, 3, "080102");
 	assert_int_equal(canlink_rx_feed(&rx, &f, 0), CANLINK_RX_BAD_PCI); /* single of 8 */
 	f = frame(0x601, 3, "050102");
-	assert_int_equal(canlink_rx_feed(&rx, &f, 0), CANLINK_RX_BAD_DLC); /* 5 announced, 2 there */
+	assert_int_equal(canlink_rx_feed(&rx, &f, 0),
+			 CANLINK_RX_BAD_DLC); /* 5 announced, 2 there */
 	for (unsigned t = 3; t <= 15; t++) {
 		f = frame(0x601, 8, "0001020304050607");
 		f.data[0] = (uint8_t)(t << 4);
@@ -596,15 +599,15 @@ static void test_wire_layout(void **state)
 	 * "Unpowered" (u8 9 + 9 bytes) = 3 + 1 + 2 + 10 = 16 bytes */
 	expect_frame(0x581, 8, "1010050B00011900");
 	expect_frame(0x581, 8, "2109556E706F7765"); /* 9, "Unpowe" */
-	expect_frame(0x581, 4, "22726564");         /* "red" */
+	expect_frame(0x581, 4, "22726564");	    /* "red" */
 	assert_int_equal(pending(), 0);
 
 	/* moveForward -20.5 mm, seq 6: 2 + 8 = 10 bytes, a first frame and
 	 * one consecutive frame; refused (Unpowered): result 0 */
-	send_raw(0x601, 8, "100A0611" "00000000");
+	send_raw(0x601, 8, "100A061100000000");
 	assert_int_equal(pending(), 0);
-	send_raw(0x601, 5, "21" "008034C0");
-	expect_frame(0x581, 5, "04061100" "00");
+	send_raw(0x601, 5, "21008034C0");
+	expect_frame(0x581, 5, "0406110000");
 	/* unknown opcode 0x50: NAK reason 4 */
 	send_raw(0x601, 3, "020750");
 	expect_frame(0x581, 4, "03075004");
@@ -615,7 +618,7 @@ static void test_wire_layout(void **state)
 	send_raw(0x601, 4, "03091E02");
 	expect_frame(0x581, 4, "03091E05");
 	/* a request longer than any operation's: NAK 2 at the first frame */
-	send_raw(0x601, 8, "10400A11" "00000000");
+	send_raw(0x601, 8, "10400A1100000000");
 	expect_frame(0x581, 4, "030A1102");
 	assert_int_equal(U.link.stats.naks, 4);
 	assert_int_equal(U.link.stats.requests, 2);
@@ -656,7 +659,8 @@ static void test_retransmission_runs_once(void **state)
 	assert_string_equal(can_line("setServo true"), "ok true");
 	assert_string_equal(can_line("pause"), "ok true");
 	/* moveLinearAbs 300 0 0, seq 0x40, sent twice: queued once */
-	static const char *ff = "101A4013" "00000000";
+	static const char *ff = "101A4013"
+				"00000000";
 	/* x = 300.0 = 0x4072C00000000000, y = theta = 0 */
 	static const char *cf[3] = {"2100C07240000000", "2200000000000000", "23000000000000"};
 	for (int rep_i = 0; rep_i < 2; rep_i++) {
@@ -664,17 +668,17 @@ static void test_retransmission_runs_once(void **state)
 		send_raw(0x601, 8, cf[0]);
 		send_raw(0x601, 8, cf[1]);
 		send_raw(0x601, 7, cf[2]);
-		expect_frame(0x581, 5, "04401300" "01");
+		expect_frame(0x581, 5, "0440130001");
 	}
 	vehicle_diag(sim_vehicle(&U.sim), &d);
 	assert_int_equal(d.queue_len, 1);
 	assert_int_equal(U.link.stats.replays, 1);
 	/* the same bytes under a new sequence number run again */
-	send_raw(0x601, 8, "101A4113" "00000000");
+	send_raw(0x601, 8, "101A411300000000");
 	send_raw(0x601, 8, cf[0]);
 	send_raw(0x601, 8, cf[1]);
 	send_raw(0x601, 7, cf[2]);
-	expect_frame(0x581, 5, "04411300" "01");
+	expect_frame(0x581, 5, "0441130001");
 	vehicle_diag(sim_vehicle(&U.sim), &d);
 	assert_int_equal(d.queue_len, 2);
 	/* through the client: the answer to the first attempt is lost, the
@@ -833,9 +837,16 @@ static void test_status_frames(void **state)
 /* The status layout, byte for byte, and its decoding. */
 static void test_status_layout(void **state)
 {
-	canlink_status_t st = {.state = 0x13, .alarms = 2, .counter = 0xFE, .battery_cV = 2375,
-			       .vx_mm_s = -250, .vy_mm_s = 3, .w_ddeg_s = -451,
-			       .x_dmm = 123456, .y_dmm = -2, .theta_mdeg = -179999};
+	canlink_status_t st = {.state = 0x13,
+			       .alarms = 2,
+			       .counter = 0xFE,
+			       .battery_cV = 2375,
+			       .vx_mm_s = -250,
+			       .vy_mm_s = 3,
+			       .w_ddeg_s = -451,
+			       .x_dmm = 123456,
+			       .y_dmm = -2,
+			       .theta_mdeg = -179999};
 	canlink_status_t back;
 	canlink_frame_t f;
 

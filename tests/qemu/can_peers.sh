@@ -85,6 +85,12 @@ case $b in C409000000000000) ;;
 pass "status frames A/B: Ready, x 250.0 mm"
 
 stop_sim
+# the repeated setServo was answered from the cache, not run again; the
+# hanging first frame timed out once
+[ "$(counter replays)" = 1 ] || fail "replays $(counter replays), expected 1 ($COUNTERS)"
+[ "$(counter timeouts)" = 1 ] || fail "timeouts $(counter timeouts), expected 1"
+[ "$(counter requests)" = 5 ] || fail "requests $(counter requests), expected 5 ($COUNTERS)"
+pass "unit counters: 5 requests run, 1 replay, 1 timeout"
 
 # python-can against a fresh unit
 start_sim --node 1 --status-hz 10

@@ -155,6 +155,7 @@ def main():
             time.sleep(0.2)
         else:
             fail("moveForward 300 did not finish (state 0x%x)" % code)
+        time.sleep(1.0)  # the wheels settle on the end of the trajectory
         st, p = call(bus, 9)  # getPosition
         x, y, th = struct.unpack("<ddd", p[1:])
         if st != 0 or abs(x - 300.0) > 0.05 or abs(y) > 0.05 or abs(th) > 0.05:

@@ -19,7 +19,7 @@ out=$build/qemu
 kmeta_image=linux-image-6.12-amd64
 kmeta_headers=linux-headers-6.12-amd64
 packages=(qemu-system-x86 "$kmeta_image" "$kmeta_headers" busybox-static can-utils gpiod
-	libgpiod-dev iproute2 cpio kmod xz-utils zstd gzip build-essential)
+	libgpiod-dev iproute2 cpio kmod xz-utils zstd gzip build-essential python3-can)
 
 t0=$(date +%s)
 log() { printf 'qemu-setup: %s\n' "$*"; }
