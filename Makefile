@@ -106,8 +106,12 @@ $(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(TEST_SUPPORT_LIB) $(HOST_LIBS)
 run: $(BUILD)/vehicle-sim
 	$(BUILD)/vehicle-sim --config config/vehicle.xml --io config/io.xml --realtime
 
+# Suites that boot a Debian kernel under QEMU (real SocketCAN, GPIO, uinput);
+# QEMU=0 leaves them out for a quick local run.
+CHECK_SUITES := $(if $(filter 0,$(QEMU)),,tests/run_qemu_tests.sh)
+
 check: all
-	$(Q)tests/run_tests.sh $(BUILD) $(TESTS)
+	$(Q)tests/run_tests.sh $(BUILD) $(TESTS) -- $(CHECK_SUITES)
 
 format:
 	clang-format -i $(FW_SRC) $(PROTO_SRC) $(HOST_SRC) $(SIM_SRC) $(wildcard */*.h) \

@@ -3,7 +3,8 @@
 # Idempotent: installs only what is missing. Run as root (or with sudo).
 set -e
 PKGS="build-essential make pkg-config libcmocka-dev libexpat1-dev valgrind clang \
-clang-tidy cppcheck gcc-arm-none-eabi libnewlib-arm-none-eabi socat"
+clang-tidy cppcheck gcc-arm-none-eabi libnewlib-arm-none-eabi socat \
+libgpiod-dev gpiod libmodbus-dev libevdev-dev"
 missing=""
 for p in $PKGS; do
 	dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing="$missing $p"
@@ -14,3 +15,6 @@ if [ -n "$missing" ]; then
 	apt-get update -qq
 	apt-get install -y -qq --no-install-recommends $missing >/dev/null
 fi
+# The QEMU guest for the SocketCAN, GPIO and uinput tests: kernel, headers,
+# qemu, can-utils, gpiod, python3-can; builds the test gpiochip module.
+"$(dirname "$0")/qemu/setup.sh"
