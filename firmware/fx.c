@@ -92,8 +92,11 @@ static const int64_t cordic_atan_deg[32] = {
 
 q32_t fx_atan2_deg(int64_t y, int64_t x)
 {
-	if (x == 0 && y == 0)
-		return 0;
+	/* The axes exactly: CORDIC would leave a residue of a few raw units. */
+	if (y == 0)
+		return x >= 0 ? 0 : -FX_DEG_180;
+	if (x == 0)
+		return y > 0 ? fx_from_int(90) : -fx_from_int(90);
 	/* Scale into +-2^60 so the CORDIC additions cannot overflow, then
 	 * rotate into the right half plane. */
 	while (fx_abs64(x) > ((int64_t)1 << 60) || fx_abs64(y) > ((int64_t)1 << 60)) {

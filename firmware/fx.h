@@ -75,33 +75,38 @@ static inline int64_t fx_mul_q30(int64_t a, int32_t b_q30)
 
 static inline q32_t fx_mul(q32_t a, q32_t b)
 {
-	/* Magnitudes, rounded half away from zero, so every build (with or
-	 * without 128-bit integers) produces the same bits. */
+	/* floor(a * b / 2^32 + 1/2), saturating. Both paths give the same bits,
+	 * so a recorded run replays identically on the MCU and the host. */
+#ifdef __SIZEOF_INT128__
+	__int128 p = ((__int128)a * b + ((__int128)1 << 31)) >> 32;
+	if (p > INT64_MAX)
+		return INT64_MAX;
+	if (p < INT64_MIN)
+		return INT64_MIN;
+	return (q32_t)p;
+#else
 	bool neg = (a < 0) != (b < 0);
 	uint64_t ua = a < 0 ? 0u - (uint64_t)a : (uint64_t)a;
 	uint64_t ub = b < 0 ? 0u - (uint64_t)b : (uint64_t)b;
-#ifdef __SIZEOF_INT128__
-	unsigned __int128 p = ((unsigned __int128)ua * ub + ((unsigned __int128)1 << 31)) >> 32;
-	if (p > (unsigned __int128)INT64_MAX)
-		return neg ? INT64_MIN : INT64_MAX;
-	uint64_t r = (uint64_t)p;
-#else
 	uint64_t ah = ua >> 32, al = ua & 0xffffffffu, bh = ub >> 32, bl = ub & 0xffffffffu;
 	uint64_t hh = ah * bh, mid1 = ah * bl, mid2 = al * bh, ll = al * bl;
-	/* result = hh<<32 + mid1 + mid2 + ll>>32 (+ rounding) */
+	/* |a b| / 2^32 = hh 2^32 + mid1 + mid2 + ll / 2^32 */
 	if (hh >> 31)
 		return neg ? INT64_MIN : INT64_MAX;
-	uint64_t r = (hh << 32);
-	uint64_t add = mid1 + mid2;
+	uint64_t r = hh << 32, add = mid1 + mid2;
 	if (add < mid1 || r + add < r)
 		return neg ? INT64_MIN : INT64_MAX;
 	r += add;
 	uint64_t low = (ll >> 32) + ((ll >> 31) & 1u);
+	/* Half-up on the signed value: an exact negative half rounds toward
+	 * zero, i.e. one less in magnitude. */
+	if (neg && (ll & 0xffffffffu) == 0x80000000u)
+		low--;
 	if (r + low < r || (r + low) >> 63)
 		return neg ? INT64_MIN : INT64_MAX;
 	r += low;
-#endif
 	return neg ? -(int64_t)r : (int64_t)r;
+#endif
 }
 
 static inline q32_t fx_wrap_deg(q32_t deg)

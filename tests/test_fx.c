@@ -1,0 +1,151 @@
+/* Fixed-point maths: products, square root, trigonometry, angles. */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdlib.h>
+
+#include <cmocka.h>
+
+#include "firmware/fx.h"
+#include "firmware/traj.h"
+
+q32_t fx_mul_portable(q32_t a, q32_t b);
+
+static const double Q = 4294967296.0;
+
+static uint64_t rng = 88172645463325252ull;
+static uint64_t next(void)
+{
+	rng ^= rng << 13;
+	rng ^= rng >> 7;
+	rng ^= rng << 17;
+	return rng;
+}
+
+static void test_mul_paths_agree(void **state)
+{
+	(void)state;
+	for (int i = 0; i < 2000000; i++) {
+		q32_t a = (q32_t)(next() >> (next() % 64)), b = (q32_t)(next() >> (next() % 64));
+		if (i % 5 == 0)
+			b = ((q32_t)1 << 31) + (q32_t)(i & 1); /* exact and near halves */
+		if (next() & 1)
+			a = -a;
+		if (next() & 1)
+			b = -b;
+		assert_int_equal(fx_mul(a, b), fx_mul_portable(a, b));
+	}
+}
+
+static void test_mul_rounding_and_saturation(void **state)
+{
+	(void)state;
+	/* 1.5 * 2^-32 * 0.5 = 0.75 raw -> 1; -0.75 raw -> -1; +-0.5 raw -> half up */
+	assert_int_equal(fx_mul(3, (q32_t)1 << 31), 2);     /* 1.5 -> 2 */
+	assert_int_equal(fx_mul(-3, (q32_t)1 << 31), -1);   /* -1.5 -> -1 */
+	assert_int_equal(fx_mul(1, (q32_t)1 << 31), 1);     /* 0.5 -> 1 */
+	assert_int_equal(fx_mul(-1, (q32_t)1 << 31), 0);    /* -0.5 -> 0 */
+	assert_int_equal(fx_mul(FX_ONE * 3, FX_ONE * 7), FX_ONE * 21);
+	assert_int_equal(fx_mul(INT64_MAX, FX_ONE * 4), INT64_MAX);
+	assert_int_equal(fx_mul(INT64_MIN, FX_ONE * 4), INT64_MIN);
+	assert_int_equal(fx_mul(-INT64_MAX, -FX_ONE * 4), INT64_MAX);
+}
+
+static void test_isqrt(void **state)
+{
+	(void)state;
+	assert_int_equal(fx_isqrt64(0), 0);
+	assert_int_equal(fx_isqrt64(15), 3);
+	assert_int_equal(fx_isqrt64(16), 4);
+	assert_int_equal(fx_isqrt64(UINT64_MAX), 4294967295u);
+	for (int i = 0; i < 100000; i++) {
+		uint64_t v = next() >> (next() % 64);
+		uint64_t r = fx_isqrt64(v);
+		assert_true(r * r <= v);
+		assert_true((r + 1) * (r + 1) > v || r == 4294967295u);
+	}
+}
+
+static void test_sin_cos_precision(void **state)
+{
+	(void)state;
+	double worst = 0;
+	for (uint64_t k = 0; k < (1u << 20); k++) {
+		uint32_t bam = (uint32_t)(k << 12) + (uint32_t)(next() & 0xfff);
+		double a = (double)bam / 4294967296.0 * 2 * M_PI;
+		double es = fabs(fx_sin_bam(bam) / 1073741824.0 - sin(a));
+		double ec = fabs(fx_cos_bam(bam) / 1073741824.0 - cos(a));
+		worst = fmax(worst, fmax(es, ec));
+	}
+	assert_true(worst < 4e-9); /* a few Q30 steps */
+	assert_int_equal(fx_sin_bam(0), 0);
+	assert_int_equal(fx_cos_bam(0), FX_Q30_ONE);
+	assert_int_equal(fx_sin_bam(1u << 30), FX_Q30_ONE);
+	assert_int_equal(fx_cos_bam(1u << 31), -FX_Q30_ONE);
+}
+
+static void test_angles(void **state)
+{
+	(void)state;
+	assert_int_equal(fx_wrap_deg(FX_DEG_180), -FX_DEG_180);
+	assert_int_equal(fx_wrap_deg(-FX_DEG_180), -FX_DEG_180);
+	assert_int_equal(fx_wrap_deg(fx_from_int(540)), -FX_DEG_180);
+	assert_int_equal(fx_wrap_deg(fx_from_int(-190)), fx_from_int(170));
+	assert_int_equal(fx_wrap_deg(fx_from_int(36000 + 45)), fx_from_int(45));
+	assert_int_equal(fx_deg_to_bam(fx_from_int(90)), 1u << 30);
+	assert_int_equal(fx_deg_to_bam(fx_from_int(-90)), 3u << 30);
+	/* atan2: the axes exactly, elsewhere within the last CORDIC step,
+	 * atan(2^-31) = 2.7e-8 degrees */
+	assert_int_equal(fx_atan2_deg(0, FX_ONE), 0);
+	assert_int_equal(fx_atan2_deg(0, -FX_ONE), -FX_DEG_180);
+	assert_int_equal(fx_atan2_deg(FX_ONE, 0), fx_from_int(90));
+	assert_int_equal(fx_atan2_deg(-FX_ONE, 0), -fx_from_int(90));
+	for (int i = 0; i < 100000; i++) {
+		int64_t y = (int64_t)(next() >> 20) - (1ll << 43), x = (int64_t)(next() >> 20) - (1ll << 43);
+		double want = atan2((double)y, (double)x) * 180 / M_PI;
+		double got = (double)fx_atan2_deg(y, x) / Q;
+		double e = fabs(got - want);
+		if (e > 180)
+			e = 360 - e;
+		assert_true(e < 3e-8);
+	}
+	assert_int_equal(fx_hypot(fx_from_int(3000), fx_from_int(4000)), fx_from_int(5000));
+}
+
+static void test_profile_lands_exactly(void **state)
+{
+	(void)state;
+	/* traj_step: from rest over many distances, never more than a per
+	 * step, never above vmax, landing on the exact raw endpoint. */
+	for (int i = 0; i < 2000; i++) {
+		q32_t d = (q32_t)(next() % (10000ull << 32)) + 1;
+		/* 1 mm/s^2 .. 2000 mm/s^2 and up to 2 m/s at 1 kHz */
+		q32_t a = (q32_t)(next() % 8590000) + 4295, vmax = (q32_t)(next() % (1ull << 33)) + a;
+		q32_t s = 0, v = 0;
+		for (int k = 0; k < 10000000 && (s < d || v != 0); k++) {
+			q32_t u = traj_step(v, d - s, vmax, a);
+			assert_true(u - v <= a && v - u <= a);
+			assert_true(u <= vmax || u <= v);
+			s += u;
+			v = u;
+			if (s == d && v > 0)
+				v = traj_step(v, 0, vmax, a);
+		}
+		assert_int_equal(s, d);
+	}
+}
+
+int main(void)
+{
+	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_mul_paths_agree),
+		cmocka_unit_test(test_mul_rounding_and_saturation),
+		cmocka_unit_test(test_isqrt),
+		cmocka_unit_test(test_sin_cos_precision),
+		cmocka_unit_test(test_angles),
+		cmocka_unit_test(test_profile_lands_exactly),
+	};
+	return cmocka_run_group_tests_name("fixed point", tests, NULL, NULL);
+}
