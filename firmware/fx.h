@@ -43,6 +43,8 @@ uint64_t fx_isqrt64(uint64_t v);
  * Absolute error below 2e-9 (about 2 LSB of Q30). */
 int32_t fx_sin_bam(uint32_t bam);
 int32_t fx_cos_bam(uint32_t bam);
+/* Both at once (one reduction); identical to the two calls. */
+void fx_sincos_bam(uint32_t bam, int32_t *s, int32_t *c);
 
 /* Degrees (Q32) to binary angle, modulo one turn. */
 

@@ -9,6 +9,7 @@ void kin_init(kin_t *k, const kin_params_t *p)
 	k->p = *p;
 	/* 2^16 / counts_per_mm in Q32 is mm per count in Q48. */
 	k->mm_per_count_q48 = p->counts_per_mm > 0 ? fx_div((q32_t)1 << 48, p->counts_per_mm) : 0;
+	k->counts_per_deg = fx_mul(p->mm_per_deg, p->counts_per_mm);
 }
 
 void kin_body_to_wheels(const kin_params_t *p, const fx_twist_t *b, q32_t w[])
@@ -42,7 +43,6 @@ void kin_sync(kin_t *k, const int32_t meas[])
 {
 	for (uint8_t i = 0; i < k->p.n; i++) {
 		k->last_meas[i] = meas[i];
-		k->meas_accum[i] = 0;
 		k->ref_counts_q32[i] = 0;
 	}
 	k->synced = true;
@@ -56,34 +56,49 @@ static int32_t sat32(int64_t v)
 void kin_step(kin_t *k, const fx_twist_t *body, const int32_t meas[], int32_t out_cps_q8[],
 	      fx_twist_t *measured_delta, int64_t *following_err_counts)
 {
-	q32_t travel[KIN_MAX_WHEELS], meas_mm[KIN_MAX_WHEELS];
+	q32_t meas_mm[KIN_MAX_WHEELS];
 	int64_t worst = 0;
+	bool moved = false;
 	if (!k->synced)
 		kin_sync(k, meas);
-	kin_body_to_wheels(&k->p, body, travel);
+	/* Body twist straight to wheel counts: at most three products a tick,
+	 * none at rest. */
+	q32_t x = body->vx_pt ? fx_mul(body->vx_pt, k->p.counts_per_mm) : 0;
+	q32_t y = body->vy_pt ? fx_mul(body->vy_pt, k->p.counts_per_mm) : 0;
+	q32_t r = body->w_pt ? fx_mul(body->w_pt, k->counts_per_deg) : 0;
+	q32_t travel[KIN_MAX_WHEELS];
+	if (k->p.kin == MOTION_KIN_OMNI) {
+		travel[0] = x - y - r;
+		travel[1] = x + y + r;
+		travel[2] = x + y - r;
+		travel[3] = x - y + r;
+	} else {
+		travel[0] = x - r;
+		travel[1] = x + r;
+	}
 	for (uint8_t i = 0; i < k->p.n; i++) {
 		int32_t d = (int32_t)((uint32_t)meas[i] - (uint32_t)k->last_meas[i]);
 		k->last_meas[i] = meas[i];
-		k->meas_accum[i] += d;
+		moved |= d != 0;
 		meas_mm[i] = ((q32_t)d * k->mm_per_count_q48) >> 16;
 
-		q32_t travel_counts = fx_mul(travel[i], k->p.counts_per_mm);
-		k->ref_counts_q32[i] += travel_counts;
-		int64_t err_q32 = k->ref_counts_q32[i] - k->meas_accum[i] * FX_ONE;
-		/* Keep both sides small: move the common integer part out. */
-		int64_t whole = k->meas_accum[i];
-		k->meas_accum[i] = 0;
-		k->ref_counts_q32[i] -= whole * FX_ONE;
+		/* The reference keeps only the error: reference minus measured. */
+		k->ref_counts_q32[i] += travel[i] - (int64_t)d * FX_ONE;
+		int64_t err_q32 = k->ref_counts_q32[i];
 
-		int64_t ff_q8 = (travel_counts * (int64_t)k->p.tick_hz) >> 24;
+		int64_t ff_q8 = (travel[i] * (int64_t)k->p.tick_hz) >> 24;
 		int64_t fb_q8 = ((err_q32 >> 16) * k->p.kp_q16) >> 24;
 		out_cps_q8[i] = sat32(ff_q8 + fb_q8);
 		int64_t e = fx_abs64(err_q32) >> 32;
 		if (e > worst)
 			worst = e;
 	}
-	if (measured_delta)
-		kin_wheels_to_body(&k->p, meas_mm, measured_delta);
+	if (measured_delta) {
+		if (moved)
+			kin_wheels_to_body(&k->p, meas_mm, measured_delta);
+		else
+			*measured_delta = (fx_twist_t){0, 0, 0};
+	}
 	if (following_err_counts)
 		*following_err_counts = worst;
 }
@@ -96,7 +111,8 @@ void odom_integrate(fx_pose_t *pose, const fx_twist_t *d)
 		return;
 	}
 	uint32_t mid = fx_deg_to_bam(pose->th_deg + d->w_pt / 2);
-	int32_t c = fx_cos_bam(mid), s = fx_sin_bam(mid);
+	int32_t c, s;
+	fx_sincos_bam(mid, &s, &c);
 	pose->x_mm += fx_mul_q30(d->vx_pt, c) - fx_mul_q30(d->vy_pt, s);
 	pose->y_mm += fx_mul_q30(d->vx_pt, s) + fx_mul_q30(d->vy_pt, c);
 	pose->th_deg = fx_wrap_deg(pose->th_deg + d->w_pt);

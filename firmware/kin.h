@@ -37,11 +37,12 @@ typedef struct {
 
 typedef struct {
 	kin_params_t p;
-	/* Reference wheel positions in counts, Q32, and the last measured counts. */
+	/* Per wheel: reference minus measured position in counts (Q32), and the
+	 * last measured counts. */
 	int64_t ref_counts_q32[KIN_MAX_WHEELS];
 	int32_t last_meas[KIN_MAX_WHEELS];
-	int64_t meas_accum[KIN_MAX_WHEELS]; /* unwrapped measured counts */
 	int64_t mm_per_count_q48; /* derived: odometry needs more than Q32 over kilometres */
+	q32_t counts_per_deg;     /* derived: wheel counts per degree of body rotation */
 	bool synced;
 } kin_t;
 

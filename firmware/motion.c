@@ -171,7 +171,8 @@ static void pop(motion_t *m)
 static void body_to_world(q32_t th, q32_t bx, q32_t by, q32_t *wx, q32_t *wy)
 {
 	uint32_t b = fx_deg_to_bam(th);
-	int32_t c = fx_cos_bam(b), s = fx_sin_bam(b);
+	int32_t c, s;
+	fx_sincos_bam(b, &s, &c);
 	*wx = fx_mul_q30(bx, c) - fx_mul_q30(by, s);
 	*wy = fx_mul_q30(bx, s) + fx_mul_q30(by, c);
 }
@@ -235,7 +236,8 @@ bool motion_circular_rel(motion_t *m, q32_t cx_mm, q32_t cy_mm, q32_t angle_deg)
 	c.angle_deg = angle_deg;
 	/* End pose: the start rotated about the centre. */
 	uint32_t b = fx_deg_to_bam(angle_deg);
-	int32_t co = fx_cos_bam(b), si = fx_sin_bam(b);
+	int32_t co, si;
+	fx_sincos_bam(b, &si, &co);
 	q32_t rx = -dx, ry = -dy;
 	c.target.x_mm = c.cx_mm + fx_mul_q30(rx, co) - fx_mul_q30(ry, si);
 	c.target.y_mm = c.cy_mm + fx_mul_q30(rx, si) + fx_mul_q30(ry, co);
@@ -746,7 +748,8 @@ static void piece_pose(motion_t *m, q32_t s_old, q32_t s, fx_pose_t *out)
 		break;
 	case SEG_ARC: {
 		uint32_t b = fx_deg_to_bam(g->dir * s);
-		int32_t co = fx_cos_bam(b), si = fx_sin_bam(b);
+		int32_t co, si;
+	fx_sincos_bam(b, &si, &co);
 		q32_t rx = g->p0.x_mm - g->cx, ry = g->p0.y_mm - g->cy;
 		out->x_mm = g->cx + fx_mul_q30(rx, co) - fx_mul_q30(ry, si);
 		out->y_mm = g->cy + fx_mul_q30(rx, si) + fx_mul_q30(ry, co);
@@ -758,9 +761,10 @@ static void piece_pose(motion_t *m, q32_t s_old, q32_t s, fx_pose_t *out)
 		 * step at the midpoint heading. */
 		q32_t ds = s - s_old;
 		q32_t th_mid = g->p0.th_deg + traj_corner_heading(&g->corner, s_old + ds / 2);
-		uint32_t b = fx_deg_to_bam(th_mid);
-		out->x_mm = m->ref.x_mm + fx_mul_q30(ds, fx_cos_bam(b));
-		out->y_mm = m->ref.y_mm + fx_mul_q30(ds, fx_sin_bam(b));
+		int32_t sn, cs;
+		fx_sincos_bam(fx_deg_to_bam(th_mid), &sn, &cs);
+		out->x_mm = m->ref.x_mm + fx_mul_q30(ds, cs);
+		out->y_mm = m->ref.y_mm + fx_mul_q30(ds, sn);
 		out->th_deg = fx_wrap_deg(g->p0.th_deg + traj_corner_heading(&g->corner, s));
 		break;
 	}
@@ -775,7 +779,8 @@ static void twist_between(const motion_t *m, const fx_pose_t *a, const fx_pose_t
 	q32_t dth = fx_wrap_deg(b->th_deg - a->th_deg);
 	q32_t dx = b->x_mm - a->x_mm, dy = b->y_mm - a->y_mm;
 	uint32_t mid = fx_deg_to_bam(a->th_deg + dth / 2);
-	int32_t c = fx_cos_bam(mid), s = fx_sin_bam(mid);
+	int32_t c, s;
+	fx_sincos_bam(mid, &s, &c);
 	t->vx_pt = fx_mul_q30(dx, c) + fx_mul_q30(dy, s);
 	t->vy_pt = m->p.kin == MOTION_KIN_OMNI ? fx_mul_q30(dy, c) - fx_mul_q30(dx, s) : 0;
 	t->w_pt = dth;

@@ -80,6 +80,13 @@ static void test_sin_cos_precision(void **state)
 		worst = fmax(worst, fmax(es, ec));
 	}
 	assert_true(worst < 4e-9); /* a few Q30 steps */
+	for (int i = 0; i < 100000; i++) {
+		uint32_t bam = (uint32_t)next();
+		int32_t s, c;
+		fx_sincos_bam(bam, &s, &c);
+		assert_int_equal(s, fx_sin_bam(bam));
+		assert_int_equal(c, fx_cos_bam(bam));
+	}
 	assert_int_equal(fx_sin_bam(0), 0);
 	assert_int_equal(fx_cos_bam(0), FX_Q30_ONE);
 	assert_int_equal(fx_sin_bam(1u << 30), FX_Q30_ONE);
