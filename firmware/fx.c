@@ -81,6 +81,41 @@ int32_t fx_sin_bam(uint32_t bam)
 
 int32_t fx_cos_bam(uint32_t bam) { return fx_sin_bam(bam + (1u << 30)); }
 
+void fx_sincos_bam(uint32_t bam, int32_t *s, int32_t *c)
+{
+	/* One reduction for both: the octant picks which polynomial gives
+	 * which function, the quadrant gives the signs. */
+	uint32_t quadrant = bam >> 30, r = bam & 0x3fffffffu;
+	int32_t s0, c0;
+	if (r <= (1u << 29)) {
+		int64_t x = ((int64_t)r * HALF_PI_Q30) >> 30;
+		s0 = sin_poly(x);
+		c0 = cos_poly(x);
+	} else {
+		int64_t x = ((int64_t)((1u << 30) - r) * HALF_PI_Q30) >> 30;
+		s0 = cos_poly(x);
+		c0 = sin_poly(x);
+	}
+	switch (quadrant) {
+	case 0:
+		*s = s0;
+		*c = c0;
+		break;
+	case 1:
+		*s = c0;
+		*c = -s0;
+		break;
+	case 2:
+		*s = -s0;
+		*c = -c0;
+		break;
+	default:
+		*s = -c0;
+		*c = s0;
+		break;
+	}
+}
+
 /* atan(2^-i) in Q32 degrees. */
 static const int64_t cordic_atan_deg[32] = {
 	193273528320, 114096026022, 60285206653, 30601712202, 15360239180, 7687607525,
