@@ -2,6 +2,31 @@
  * runs on a Cortex-M), integer square root, trigonometry. */
 #include "fx.h"
 
+q32_t fx_mul_portable(q32_t a, q32_t b)
+{
+	bool neg = (a < 0) != (b < 0);
+	uint64_t ua = a < 0 ? 0u - (uint64_t)a : (uint64_t)a;
+	uint64_t ub = b < 0 ? 0u - (uint64_t)b : (uint64_t)b;
+	uint64_t ah = ua >> 32, al = ua & 0xffffffffu, bh = ub >> 32, bl = ub & 0xffffffffu;
+	uint64_t hh = ah * bh, mid1 = ah * bl, mid2 = al * bh, ll = al * bl;
+	/* |a b| / 2^32 = hh 2^32 + mid1 + mid2 + ll / 2^32 */
+	if (hh >> 31)
+		return neg ? INT64_MIN : INT64_MAX;
+	uint64_t r = hh << 32, add = mid1 + mid2;
+	if (add < mid1 || r + add < r)
+		return neg ? INT64_MIN : INT64_MAX;
+	r += add;
+	uint64_t low = (ll >> 32) + ((ll >> 31) & 1u);
+	/* Half-up on the signed value: an exact negative half rounds toward
+	 * zero, one less in magnitude. */
+	if (neg && (ll & 0xffffffffu) == 0x80000000u)
+		low--;
+	if (r + low < r || (r + low) >> 63)
+		return neg ? INT64_MIN : INT64_MAX;
+	r += low;
+	return neg ? -(int64_t)r : (int64_t)r;
+}
+
 int64_t fx_muldiv(int64_t a, int64_t num, int64_t den)
 {
 	bool neg = (a < 0) != (num < 0);

@@ -75,10 +75,14 @@ static inline int64_t fx_mul_q30(int64_t a, int32_t b_q30)
 	return p_hi * 4 + ((p_lo + ((int64_t)1 << 29)) >> 30);
 }
 
+/* floor(a * b / 2^32 + 1/2), saturating: the portable form, and the one a
+ * build without 128-bit integers (a Cortex-M) uses out of line. */
+q32_t fx_mul_portable(q32_t a, q32_t b);
+
 static inline q32_t fx_mul(q32_t a, q32_t b)
 {
-	/* floor(a * b / 2^32 + 1/2), saturating. Both paths give the same bits,
-	 * so a recorded run replays identically on the MCU and the host. */
+	/* Both forms give the same bits, so a recorded run replays identically
+	 * on the MCU and the host (tests/test_fx.c compares them). */
 #ifdef __SIZEOF_INT128__
 	__int128 p = ((__int128)a * b + ((__int128)1 << 31)) >> 32;
 	if (p > INT64_MAX)
@@ -87,27 +91,7 @@ static inline q32_t fx_mul(q32_t a, q32_t b)
 		return INT64_MIN;
 	return (q32_t)p;
 #else
-	bool neg = (a < 0) != (b < 0);
-	uint64_t ua = a < 0 ? 0u - (uint64_t)a : (uint64_t)a;
-	uint64_t ub = b < 0 ? 0u - (uint64_t)b : (uint64_t)b;
-	uint64_t ah = ua >> 32, al = ua & 0xffffffffu, bh = ub >> 32, bl = ub & 0xffffffffu;
-	uint64_t hh = ah * bh, mid1 = ah * bl, mid2 = al * bh, ll = al * bl;
-	/* |a b| / 2^32 = hh 2^32 + mid1 + mid2 + ll / 2^32 */
-	if (hh >> 31)
-		return neg ? INT64_MIN : INT64_MAX;
-	uint64_t r = hh << 32, add = mid1 + mid2;
-	if (add < mid1 || r + add < r)
-		return neg ? INT64_MIN : INT64_MAX;
-	r += add;
-	uint64_t low = (ll >> 32) + ((ll >> 31) & 1u);
-	/* Half-up on the signed value: an exact negative half rounds toward
-	 * zero, i.e. one less in magnitude. */
-	if (neg && (ll & 0xffffffffu) == 0x80000000u)
-		low--;
-	if (r + low < r || (r + low) >> 63)
-		return neg ? INT64_MIN : INT64_MAX;
-	r += low;
-	return neg ? -(int64_t)r : (int64_t)r;
+	return fx_mul_portable(a, b);
 #endif
 }
 

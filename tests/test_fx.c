@@ -11,8 +11,6 @@
 #include "firmware/fx.h"
 #include "firmware/traj.h"
 
-q32_t fx_mul_portable(q32_t a, q32_t b);
-
 static const double Q = 4294967296.0;
 
 static uint64_t rng = 88172645463325252ull;
