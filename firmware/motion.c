@@ -740,8 +740,10 @@ static void piece_pose(motion_t *m, q32_t s_old, q32_t s, fx_pose_t *out)
 	case SEG_LINE:
 		out->x_mm = g->p0.x_mm + fx_mul_q30(s, g->ux);
 		out->y_mm = g->p0.y_mm + fx_mul_q30(s, g->uy);
-		if (g->dth != 0)
-			out->th_deg = fx_wrap_deg(g->p0.th_deg + fx_div(s, g->omni_k));
+		if (g->dth != 0) {
+			q32_t turned = fx_div(s, g->omni_k);
+			out->th_deg = fx_wrap_deg(g->p0.th_deg + (g->dth < 0 ? -turned : turned));
+		}
 		break;
 	case SEG_TURN:
 		out->th_deg = fx_wrap_deg(g->p0.th_deg + g->dir * s);
@@ -935,11 +937,10 @@ static void velocity_tick(motion_t *m, fx_twist_t *out)
 	m->vel.w_pt = slew(m->vel.w_pt, tgt.w_pt, ar);
 	*out = m->vel;
 	if (twist_zero(&m->vel) && twist_zero(&tgt)) {
-		if (m->mode == MODE_JOG && (m->jog_age_ticks > m->jog_timeout_ticks || braking ||
-					    twist_zero(&m->vtarget))) {
-			m->mode = MODE_IDLE;
-			m->stopping = false;
-		} else if (m->mode == MODE_JOYSTICK && m->stopping) {
+		bool jog_done = m->mode == MODE_JOG && (m->jog_age_ticks > m->jog_timeout_ticks ||
+							braking || twist_zero(&m->vtarget));
+		bool joystick_done = m->mode == MODE_JOYSTICK && m->stopping;
+		if (jog_done || joystick_done) {
 			m->mode = MODE_IDLE;
 			m->stopping = false;
 		}

@@ -27,7 +27,10 @@ FUZZ_BINS := $(addprefix $(FUZZ_BUILD)/,$(FUZZ_ALL))
 # libFuzzer options shared by every run: a hang is a finding (10 s per input).
 FUZZ_OPTS := -timeout=10 -rss_limit_mb=2048 -print_final_stats=1
 
-.PHONY: fuzz fuzz-build fuzz-ci fuzz-replay $(addprefix fuzz-run-,$(FUZZ_ALL))
+# fuzz-run-* must not be .PHONY: make skips pattern rules for phony targets
+# (they would silently do nothing); FORCE makes them run every time instead.
+.PHONY: fuzz fuzz-build fuzz-ci fuzz-replay FORCE
+FORCE:
 
 $(FUZZ_BUILD)/obj/%.o: %.c
 	@mkdir -p $(dir $@)
@@ -45,7 +48,7 @@ $(FUZZ_BUILD)/fuzz_%: $(FUZZ_BUILD)/obj/tests/fuzz/fuzz_%.o $(FUZZ_BUILD)/libsut
 fuzz-build: $(FUZZ_BINS)
 
 # One target for $(FUZZ_RUN_TIME) s, seeds read-only, new inputs to the work corpus.
-fuzz-run-%: $(FUZZ_BUILD)/%
+fuzz-run-%: $(FUZZ_BUILD)/% FORCE
 	@mkdir -p $(FUZZ_BUILD)/corpus/$* $(FUZZ_BUILD)/artifacts
 	@echo "  FUZZ    $* for $(FUZZ_RUN_TIME) s"
 	$(Q)$(FUZZ_BUILD)/$* $(FUZZ_OPTS) -max_total_time=$(FUZZ_RUN_TIME) \

@@ -226,6 +226,17 @@ static void test_omni_linear(void **state)
 	assert_int_equal(r.m.ref.x_mm, q(500));
 	assert_int_equal(r.m.ref.y_mm, q(-700));
 	assert_int_equal(r.m.ref.th_deg, q(45));
+	/* Clockwise heading change on the way, and back through +-180. */
+	fx_pose_t p2 = {q(-300), q(200), q(-120)};
+	assert_true(motion_linear_abs(&r.m, &p2));
+	fx_pose_t p3 = {q(0), q(0), q(170)};
+	assert_true(motion_linear_abs(&r.m, &p3));
+	run_until_idle(&r, 30000);
+	assert_int_equal(r.m.ref.x_mm, 0);
+	assert_int_equal(r.m.ref.y_mm, 0);
+	assert_int_equal(r.m.ref.th_deg, q(170));
+	assert_true(r.aw_max <= 180.0 * 1.0000001);
+	assert_true(r.w_max <= 90.0 * 1.0000001);
 }
 
 static void test_arc_quarter(void **state)

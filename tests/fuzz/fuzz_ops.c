@@ -346,9 +346,16 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	encoder_frozen = false;
 	prev_servo = false;
 	prev_cmd = (fx_twist_t){0, 0, 0};
-	for (unsigned k = 0; k < MAX_ACTIONS && r.i < r.n; k++)
-		if (!act(&r, &ticks))
+	for (unsigned k = 0; k < MAX_ACTIONS && r.i < r.n; k++) {
+		bool go = act(&r, &ticks);
+		/* A servo that went off between two ticks (even if switched on
+		 * again) stopped the motion at once: no acceleration bound
+		 * applies across that boundary. */
+		if (!S.vehicle.servo)
+			prev_servo = false;
+		if (!go)
 			break;
+	}
 	/* Let the last command play out a little. */
 	for (unsigned k = 0; k < 200; k++)
 		tick();
