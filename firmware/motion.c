@@ -838,6 +838,14 @@ static void path_tick(motion_t *m, fx_twist_t *out)
 					amax = m->amax_r_pt2;
 				else if (m->seg.kind == SEG_ARC)
 					amax = fx_min64(m->amax_r_pt2, fx_div(m->amax_t_pt2, m->seg.arc_k));
+				else if (m->seg.kind == SEG_LINE && m->seg.dth != 0)
+					/* Heading turns with the path: both limits bind. */
+					amax = fx_min64(amax, fx_mul(m->amax_r_pt2, m->seg.omni_k));
+				else if (m->seg.kind == SEG_CORNER)
+					/* Half the rotational limit for braking, the other
+					 * half is the curvature change (traj.h). */
+					amax = fx_min64(amax,
+							fx_mul(m->amax_r_pt2, m->seg.corner.k_mm_deg) / 2);
 				u = fx_min64(u, fx_max64(m->v - amax, 0));
 			}
 			budget = u;
