@@ -56,7 +56,9 @@ static int32_t sat32(int64_t v)
 void kin_step(kin_t *k, const fx_twist_t *body, const int32_t meas[], int32_t out_cps_q8[],
 	      fx_twist_t *measured_delta, int64_t *following_err_counts)
 {
-	q32_t meas_mm[KIN_MAX_WHEELS];
+	/* Zeroed: n follows kin at init (vs_config_axes), but kin_params_t alone
+	 * does not tie them; a mismatch reads 0, not stack garbage. */
+	q32_t meas_mm[KIN_MAX_WHEELS] = {0};
 	int64_t worst = 0;
 	bool moved = false;
 	if (!k->synced)
@@ -66,7 +68,7 @@ void kin_step(kin_t *k, const fx_twist_t *body, const int32_t meas[], int32_t ou
 	q32_t x = body->vx_pt ? fx_mul(body->vx_pt, k->p.counts_per_mm) : 0;
 	q32_t y = body->vy_pt ? fx_mul(body->vy_pt, k->p.counts_per_mm) : 0;
 	q32_t r = body->w_pt ? fx_mul(body->w_pt, k->counts_per_deg) : 0;
-	q32_t travel[KIN_MAX_WHEELS];
+	q32_t travel[KIN_MAX_WHEELS] = {0};
 	if (k->p.kin == MOTION_KIN_OMNI) {
 		travel[0] = x - y - r;
 		travel[1] = x + y + r;

@@ -82,14 +82,14 @@ static void clothoid_half(q32_t psi_deg, int64_t *x1, int64_t *y1)
 	int64_t sx = 0, sy = 0;
 	for (int i = 0; i <= N; i++) {
 		/* heading psi * (i/N)^2 */
-		q32_t th = (psi_deg / (N * N)) * i * i;
+		q32_t th = (psi_deg / ((int64_t)N * N)) * i * i;
 		uint32_t b = fx_deg_to_bam(th);
 		int64_t w = (i == 0 || i == N) ? 1 : ((i & 1) ? 4 : 2);
 		sx += w * fx_cos_bam(b);
 		sy += w * fx_sin_bam(b);
 	}
-	*x1 = sx / (3 * N);
-	*y1 = sy / (3 * N);
+	*x1 = sx / (3 * (int64_t)N);
+	*y1 = sy / (3 * (int64_t)N);
 }
 
 bool traj_corner_plan(traj_corner_t *c, q32_t phi_deg, q32_t t_avail_mm, q32_t ar_pt2)

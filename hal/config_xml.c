@@ -17,23 +17,25 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define MAX_FILE_BYTES (1024 * 1024)
+#define MAX_FILE_BYTES ((size_t)1024 * 1024)
 
 typedef enum { T_DOUBLE, T_U32, T_U16, T_BOOL, T_KIN } ftype_t;
 
+/* Widest members first: no padding between them. */
 typedef struct {
 	const char *elem;
 	const char *attr;
-	ftype_t type;
+	const char *cfield; /* vs_config_t member name, as vs_config_check names it */
 	size_t off;
 	double min, max;
-	bool min_excl;	    /* value must be > min */
-	const char *cfield; /* vs_config_t member name, as vs_config_check names it */
+	ftype_t type;
+	bool min_excl; /* value must be > min */
 } field_t;
 
 #define F(e, a, t, member, lo, hi, ex)                                                             \
 	{                                                                                          \
-		e, a, t, offsetof(vs_config_t, member), lo, hi, ex, #member                        \
+		.elem = (e), .attr = (a), .cfield = #member, .off = offsetof(vs_config_t, member), \
+		.min = (lo), .max = (hi), .type = (t), .min_excl = (ex)                            \
 	}
 
 static const field_t fields[] = {
@@ -80,6 +82,8 @@ typedef struct {
 	bool failed;
 	bool is_io;
 	int depth;
+	int skip_depth; /* inside <backends>: elements at this depth or deeper are skipped */
+	unsigned long backends_line;
 	vs_config_t *cfg;
 	hal_io_map_t *map;
 	unsigned long field_line[NFIELDS];
@@ -254,6 +258,16 @@ static int vehicle_attrs(ctx_t *c, const char *elem, const XML_Char **atts)
 	return c->failed ? -1 : 0;
 }
 
+/* src into dst[cap] with its NUL; false (dst untouched) when it does not fit. */
+static bool copy_str(char *dst, size_t cap, const char *src)
+{
+	size_t n = strlen(src);
+	if (n >= cap)
+		return false;
+	memcpy(dst, src, n + 1);
+	return true;
+}
+
 static int io_entry(ctx_t *c, const char *elem, const XML_Char **atts)
 {
 	unsigned long line = cur_line(c);
@@ -277,20 +291,18 @@ static int io_entry(ctx_t *c, const char *elem, const XML_Char **atts)
 			def.id = (uint32_t)d;
 			have_id = true;
 		} else if (!strcmp(k, "name")) {
-			if (strlen(v) >= VS_IO_NAME_MAX)
+			if (!copy_str(def.name, sizeof(def.name), v))
 				return fail(c, line, "%s.name: longer than %d characters '%s'",
 					    elem, VS_IO_NAME_MAX - 1, v);
-			strcpy(def.name, v);
 		} else if (!strcmp(k, "width")) {
 			if (parse_ranged(c, elem, k, v, 1, 32, false, true, &d) < 0)
 				return -1;
 			def.width = (uint8_t)d;
 		} else if (!strcmp(k, "chip")) {
-			if (*v == '\0' || strlen(v) >= HAL_IO_CHIP_MAX)
+			if (*v == '\0' || !copy_str(m.chip, sizeof(m.chip), v))
 				return fail(c, line,
 					    "%s.chip: empty or longer than %d characters '%s'",
 					    elem, HAL_IO_CHIP_MAX - 1, v);
-			strcpy(m.chip, v);
 		} else if (!strcmp(k, "line")) {
 			if (parse_ranged(c, elem, k, v, 0, 65535, false, true, &d) < 0)
 				return -1;
@@ -332,6 +344,8 @@ static int start_element(ctx_t *c, const XML_Char *name, const XML_Char **atts)
 	int depth = c->depth++;
 	const char *root = c->is_io ? "io" : "vehicle";
 
+	if (c->skip_depth && depth >= c->skip_depth)
+		return 0;
 	if (depth == 0) {
 		if (strcmp(name, root) != 0)
 			return fail(c, line, "%s: unknown element (expected <%s>)", name, root);
@@ -343,6 +357,15 @@ static int start_element(ctx_t *c, const XML_Char *name, const XML_Char **atts)
 	}
 	if (depth == 1 && c->is_io && (!strcmp(name, "input") || !strcmp(name, "output")))
 		return io_entry(c, name, atts);
+	if (depth == 1 && !c->is_io && !strcmp(name, "backends")) {
+		/* The Linux backends' own section, parsed by hal/linux/backend_cfg.c. */
+		if (c->backends_line)
+			return fail(c, line, "%s: duplicate element (first at line %lu)", name,
+				    c->backends_line);
+		c->backends_line = line;
+		c->skip_depth = depth + 1;
+		return 0;
+	}
 	if (depth == 1 && !c->is_io) {
 		for (size_t s = 0; s < NSECTIONS; s++) {
 			if (strcmp(name, sections[s]) != 0)
@@ -369,6 +392,8 @@ static void XMLCALL on_end(void *ud, const XML_Char *name)
 	(void)name;
 	ctx_t *c = ud;
 	c->depth--;
+	if (c->skip_depth && c->depth < c->skip_depth)
+		c->skip_depth = 0;
 }
 
 static void XMLCALL on_text(void *ud, const XML_Char *s, int len)
@@ -407,7 +432,7 @@ static int parse_file(ctx_t *c)
 	fclose(f);
 	if (rerr || n > MAX_FILE_BYTES) {
 		free(buf);
-		fail(c, 0, rerr ? "read error" : "larger than %d bytes", MAX_FILE_BYTES);
+		fail(c, 0, rerr ? "read error" : "larger than %zu bytes", MAX_FILE_BYTES);
 		return -1;
 	}
 

@@ -20,6 +20,8 @@
  *     <battery low_v="22.0" critical_v="20.0"/>
  *     <devices contact_sensor="true" obstacle_input="true" estop="true" joystick="true"
  *              joystick_deadband="0.05"/>
+ *     <backends>...</backends>   (vehicle-fw's hardware backends, at most once;
+ *                                 skipped here, see hal/linux/backend_cfg.h)
  *   </vehicle>
  *
  * io.xml (document order is kept; ids unique, 1..; 0 is the unit itself):

@@ -29,7 +29,7 @@ int sockcan_open(sockcan_t *s, const char *ifname, const uint32_t *ids, size_t n
 	if (fd < 0)
 		return -1;
 	memset(&ifr, 0, sizeof(ifr));
-	strcpy(ifr.ifr_name, ifname);
+	memcpy(ifr.ifr_name, ifname, strlen(ifname)); /* fits, checked above; NUL from memset */
 	if (ioctl(fd, SIOCGIFINDEX, &ifr) < 0)
 		goto fail;
 	if (ids) {

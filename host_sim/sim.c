@@ -291,7 +291,7 @@ static bool cmd_sim(sim_t *s, int argc, char **argv, char *reply, size_t cap)
 bool sim_extra(void *ctx, int argc, char **argv, char *reply, size_t cap)
 {
 	sim_t *s = ctx;
-	if (argc < 1)
+	if (!s || argc < 1) /* no simulator behind this console: not ours */
 		return false;
 	const char *name = argv[0][0] == '$' ? argv[0] + 1 : argv[0];
 	if (!strcmp(name, "wait"))

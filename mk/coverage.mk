@@ -10,6 +10,7 @@ COV_BRANCH_MIN ?= 85
 .PHONY: coverage
 
 coverage:
+	$(Q)mkdir -p $(COV_BUILD)
 	$(Q)find $(COV_BUILD) -name '*.gcda' -delete 2>/dev/null || true
 	$(Q)$(MAKE) --no-print-directory BUILD=$(COV_BUILD) COVERAGE=1 OPT=-O0 check > $(COV_BUILD).log 2>&1 \
 		|| { tail -n 40 $(COV_BUILD).log; exit 1; }

@@ -8,7 +8,12 @@
 
 LINUX_SRC := $(wildcard hal/linux/*.c)
 LINUX_LIB := $(BUILD)/liblinux.a
-LINUX_LDLIBS := -lgpiod
+LINUX_LDLIBS := -lgpiod -lmodbus -levdev -lpthread
+# libevdev's headers live in their own folder (arch-independent, so the
+# native path serves the cross build too).
+LINUX_CFLAGS := -I/usr/include/libevdev-1.0
+
+$(call objs,$(LINUX_SRC)) $(BUILD)/obj/tests/test_linux_fw.o: EXTRA_CFLAGS += $(LINUX_CFLAGS)
 
 $(LINUX_LIB): $(call objs,$(LINUX_SRC))
 
@@ -28,3 +33,40 @@ $(BUILD)/tests/test_linux_%: $(BUILD)/obj/tests/test_linux_%.o $(TEST_SUPPORT_LI
 	$(Q)$(CC) $(LDFLAGS) -o $@ $^ -lcmocka $(LDLIBS_HOST) $(LINUX_LDLIBS) -lutil
 
 all: $(BUILD)/vehicle-fw
+
+# make install [PREFIX=/usr/local] [SYSCONFDIR=/etc] [DESTDIR=]
+# Binaries, the systemd unit, example configuration; the configuration in
+# SYSCONFDIR/vehicle is written only when absent (never overwritten).
+PREFIX ?= /usr/local
+SYSCONFDIR ?= /etc
+BINDIR := $(PREFIX)/bin
+UNITDIR ?= $(PREFIX)/lib/systemd/system
+EXAMPLEDIR := $(PREFIX)/share/vehicle/examples
+.PHONY: install
+install: $(BUILD)/vehicle-fw $(BUILD)/vehiclectl
+	install -d $(DESTDIR)$(BINDIR) $(DESTDIR)$(UNITDIR) $(DESTDIR)$(EXAMPLEDIR) \
+		$(DESTDIR)$(SYSCONFDIR)/vehicle
+	install -m 755 $(BUILD)/vehicle-fw $(BUILD)/vehiclectl $(DESTDIR)$(BINDIR)/
+	sed -e 's|@BINDIR@|$(BINDIR)|g' -e 's|@SYSCONFDIR@|$(SYSCONFDIR)|g' \
+		tools/systemd/vehicle-fw.service >$(DESTDIR)$(UNITDIR)/vehicle-fw.service
+	chmod 644 $(DESTDIR)$(UNITDIR)/vehicle-fw.service
+	install -m 644 config/vehicle-linux.xml config/vehicle.xml config/vehicle-omni.xml \
+		config/io.xml $(DESTDIR)$(EXAMPLEDIR)/
+	[ -e $(DESTDIR)$(SYSCONFDIR)/vehicle/vehicle.xml ] || \
+		install -m 644 config/vehicle-linux.xml $(DESTDIR)$(SYSCONFDIR)/vehicle/vehicle.xml
+	[ -e $(DESTDIR)$(SYSCONFDIR)/vehicle/io.xml ] || \
+		install -m 644 config/io.xml $(DESTDIR)$(SYSCONFDIR)/vehicle/io.xml
+
+# Modbus RTU drive simulator for the tests (hal/linux/sim/).
+$(BUILD)/mbdrive-sim: $(BUILD)/obj/hal/linux/sim/mbdrive_sim_main.o
+	@$(if $(Q),echo "  LD      $@")
+	$(Q)$(CC) $(LDFLAGS) -o $@ $^ -lmodbus
+
+all: $(BUILD)/mbdrive-sim
+
+# Virtual uinput joystick for the QEMU guest tests (hal/linux/sim/).
+$(BUILD)/ujoy: $(BUILD)/obj/hal/linux/sim/ujoy_main.o
+	@$(if $(Q),echo "  LD      $@")
+	$(Q)$(CC) $(LDFLAGS) -o $@ $^
+
+all: $(BUILD)/ujoy

@@ -275,12 +275,13 @@ int vc_getState(vc_client_t *c, bool *ret, int16_t *state, char msg[VS_STATE_MSG
 
 	if (e != VC_OK)
 		return e;
-	if (strlen(out[1].s) >= VS_STATE_MSG_MAX)
+	size_t len = strlen(out[1].s);
+	if (len >= VS_STATE_MSG_MAX)
 		return VC_E_PROTO;
 	if (state)
 		*state = out[0].h;
 	if (msg)
-		strcpy(msg, out[1].s);
+		memcpy(msg, out[1].s, len + 1);
 	return VC_OK;
 }
 

@@ -229,11 +229,25 @@ static int build_line(unsigned opcode, const uint8_t *req, size_t req_len, char 
 /* "ok protocol N table 0xHHHH" out of the $version reply. */
 static int parse_info(const char *line, uint8_t *resp, size_t cap, size_t *resp_len)
 {
+	static const char tab[] = " table 0x";
 	const char *p = strstr(line, " protocol ");
-	unsigned ver, crc;
+	char *end;
+	unsigned long ver, crc;
 
-	if (!p || sscanf(p, " protocol %u table 0x%x", &ver, &crc) != 2 || ver > 255 ||
-	    crc > 0xFFFF || cap < WIRE_INFO_LEN)
+	if (!p || cap < WIRE_INFO_LEN)
+		return VC_E_PROTO;
+	p += strlen(" protocol ");
+	/* strtoul alone would take a sign or blanks: digits must follow. */
+	if (*p < '0' || *p > '9')
+		return VC_E_PROTO;
+	ver = strtoul(p, &end, 10);
+	if (ver > 255 || strncmp(end, tab, sizeof(tab) - 1) != 0)
+		return VC_E_PROTO;
+	p = end + sizeof(tab) - 1;
+	if (!((*p >= '0' && *p <= '9') || (*p >= 'a' && *p <= 'f') || (*p >= 'A' && *p <= 'F')))
+		return VC_E_PROTO;
+	crc = strtoul(p, &end, 16);
+	if (crc > 0xFFFF)
 		return VC_E_PROTO;
 	wire_info(resp); /* sizes and count as this host knows them */
 	resp[0] = (uint8_t)ver;

@@ -14,7 +14,7 @@ enum {
 };
 
 #define VS_CMD(name, op, it, in, ot, on, help)                                                     \
-	_Static_assert(CMD_IDX_##name + 1 == op, "opcode of " #name " is not its row number");     \
+	_Static_assert(CMD_IDX_##name + 1 == (op), "opcode of " #name " is not its row number");   \
 	_Static_assert(sizeof(it) - 1 <= CMD_MAX_FIELDS, #name ": too many in fields");            \
 	_Static_assert(sizeof(ot) - 1 <= CMD_MAX_FIELDS, #name ": too many out fields");
 #include "commands.def"

@@ -38,14 +38,15 @@ typedef enum {
 
 /* Opcodes, CMD_OP_<name>, fixed by the table. */
 enum {
-#define VS_CMD(name, op, it, in, ot, on, help) CMD_OP_##name = op,
+#define VS_CMD(name, op, it, in, ot, on, help) CMD_OP_##name = (op),
 #include "commands.def"
 #undef VS_CMD
 };
 
 enum {
 	CMD_COUNT = 0
-#define VS_CMD(name, op, it, in, ot, on, help) +1
+/* One "+1" term per row; a fragment of the sum, so it cannot be parenthesised. */
+#define VS_CMD(name, op, it, in, ot, on, help) +1 /* NOLINT(bugprone-macro-parentheses) */
 #include "commands.def"
 #undef VS_CMD
 };

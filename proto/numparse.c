@@ -110,7 +110,7 @@ np_result_t np_parse_double(const char *s, double *out)
 	e10 = d.exp - d.fn + (n - first - used);
 	if (w == 0) {
 		v = 0.0;
-	} else if (w <= NP_2P53 && e10 >= -22 && e10 <= 22 && used == n - first) {
+	} else if (w <= NP_2P53 && e10 >= -22 && e10 <= 22 && n - first <= 19) {
 		/* Both operands exact: one correctly rounded operation. */
 		v = (double)w;
 		v = e10 < 0 ? v / pow10_exact[-e10] : v * pow10_exact[e10];

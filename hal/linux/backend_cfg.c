@@ -1,0 +1,431 @@
+/* <backends> of the vehicle file; format in backend_cfg.h. */
+#include "backend_cfg.h"
+
+#include <errno.h>
+#include <expat.h>
+#include <libevdev/libevdev.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define MAX_FILE_BYTES (1u << 20)
+
+typedef struct {
+	XML_Parser p;
+	const char *path;
+	char *err;
+	size_t errlen;
+	bool failed;
+	int depth;
+	bool in_backends;
+	backend_cfg_t *b;
+	unsigned long drive_line[VS_MAX_AXES];
+	unsigned long at_line; /* nonzero: report this line instead of the parser's */
+} bctx_t;
+
+static const char *const line_names[BK_LINE_SERVO0 + 1] = {
+    "contact", "obstacle", "obstacle_caution", "estop", "relay", "relay_feedback", "servo_enable",
+};
+
+const char *backend_line_name(unsigned fn)
+{
+	if (fn >= BK_LINE_COUNT)
+		return "?";
+	return line_names[fn < BK_LINE_SERVO0 ? fn : BK_LINE_SERVO0];
+}
+
+void backend_cfg_defaults(backend_cfg_t *b)
+{
+	memset(b, 0, sizeof(*b));
+	b->settle_ms = 20;
+	b->battery_source = BK_BATTERY_FIXED;
+	b->battery_mv = 24000;
+	b->battery_scale = 1.0;
+	for (int i = 0; i < 3; i++) {
+		b->joystick.code[i] = -1;
+		b->joystick.scale[i] = 1.0;
+	}
+}
+
+static int fail(bctx_t *c, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static int fail(bctx_t *c, const char *fmt, ...)
+{
+	if (c->failed)
+		return -1;
+	c->failed = true;
+	unsigned long line = c->at_line ? c->at_line
+			   : c->p      ? (unsigned long)XML_GetCurrentLineNumber(c->p)
+				       : 0ul;
+	int n = snprintf(c->err, c->errlen, "%s:%lu: ", c->path, line);
+	if (n >= 0 && (size_t)n < c->errlen) {
+		va_list ap;
+		va_start(ap, fmt);
+		vsnprintf(c->err + n, c->errlen - (size_t)n, fmt, ap);
+		va_end(ap);
+	}
+	if (c->p)
+		XML_StopParser(c->p, XML_FALSE);
+	return -1;
+}
+
+/* Whole-string unsigned integer in [min, max]. */
+static int get_uint(bctx_t *c, const char *el, const char *at, const char *v, unsigned long min,
+		    unsigned long max, uint32_t *out)
+{
+	char *end;
+	errno = 0;
+	if (*v < '0' || *v > '9')
+		return fail(c, "%s.%s: not a number '%s'", el, at, v);
+	unsigned long n = strtoul(v, &end, 10);
+	if (*end != '\0')
+		return fail(c, "%s.%s: not a number '%s'", el, at, v);
+	if (errno == ERANGE || n < min || n > max)
+		return fail(c, "%s.%s: out of range %lu..%lu '%s'", el, at, min, max, v);
+	*out = (uint32_t)n;
+	return 0;
+}
+
+static int get_bool(bctx_t *c, const char *el, const char *at, const char *v, bool *out)
+{
+	if (!strcmp(v, "true") || !strcmp(v, "1"))
+		*out = true;
+	else if (!strcmp(v, "false") || !strcmp(v, "0"))
+		*out = false;
+	else
+		return fail(c, "%s.%s: not a boolean '%s'", el, at, v);
+	return 0;
+}
+
+static int drive_elem(bctx_t *c, const XML_Char **a)
+{
+	uint32_t axis = UINT32_MAX, bus = UINT32_MAX, unit = UINT32_MAX;
+	int type = -1;
+	for (; a[0]; a += 2) {
+		if (!strcmp(a[0], "axis")) {
+			if (get_uint(c, "drive", "axis", a[1], 0, VS_MAX_AXES - 1, &axis))
+				return -1;
+		} else if (!strcmp(a[0], "type")) {
+			if (!strcmp(a[1], "loopback"))
+				type = BK_DRIVE_LOOPBACK;
+			else if (!strcmp(a[1], "modbus"))
+				type = BK_DRIVE_MODBUS;
+			else
+				return fail(c, "drive.type: unknown backend '%s'", a[1]);
+		} else if (!strcmp(a[0], "bus")) {
+			if (get_uint(c, "drive", "bus", a[1], 0, BK_MODBUS_BUSES - 1, &bus))
+				return -1;
+		} else if (!strcmp(a[0], "unit")) {
+			if (get_uint(c, "drive", "unit", a[1], 1, 247, &unit))
+				return -1;
+		} else {
+			return fail(c, "drive.%s: unknown attribute", a[0]);
+		}
+	}
+	if (axis == UINT32_MAX)
+		return fail(c, "drive.axis: required");
+	if (type < 0)
+		return fail(c, "drive.type: required");
+	if (type == BK_DRIVE_MODBUS) {
+		if (bus == UINT32_MAX || unit == UINT32_MAX)
+			return fail(c, "drive.%s: required for modbus", bus == UINT32_MAX ? "bus" : "unit");
+		c->b->drive_bus[axis] = (uint8_t)bus;
+		c->b->drive_unit[axis] = (uint8_t)unit;
+	} else if (bus != UINT32_MAX || unit != UINT32_MAX) {
+		return fail(c, "drive.%s: only for modbus", bus != UINT32_MAX ? "bus" : "unit");
+	}
+	c->b->drive_type[axis] = (uint8_t)type;
+	c->drive_line[axis] = (unsigned long)XML_GetCurrentLineNumber(c->p);
+	return 0;
+}
+
+static const char *const reg_names[BK_REG_COUNT] = {
+    "reg_target_speed", "reg_position", "reg_status", "reg_alarm", "reg_servo_on",
+    "reg_fault_reset",
+};
+
+static int modbus_elem(bctx_t *c, const XML_Char **a)
+{
+	bk_modbus_bus_t m = {.baud = 115200, .parity = 'N', .stop_bits = 1, .timeout_ms = 20,
+			     .retries = 1};
+	uint32_t bus = UINT32_MAX;
+	bool have_reg[BK_REG_COUNT] = {false};
+	for (; a[0]; a += 2) {
+		int r = -1;
+		for (int i = 0; i < BK_REG_COUNT; i++)
+			if (!strcmp(a[0], reg_names[i]))
+				r = i;
+		if (r >= 0) {
+			if (get_uint(c, "modbus", a[0], a[1], 0, 65535, &m.reg[r]))
+				return -1;
+			have_reg[r] = true;
+		} else if (!strcmp(a[0], "bus")) {
+			if (get_uint(c, "modbus", "bus", a[1], 0, BK_MODBUS_BUSES - 1, &bus))
+				return -1;
+		} else if (!strcmp(a[0], "device")) {
+			if (a[1][0] != '/' || strlen(a[1]) >= sizeof(m.device))
+				return fail(c, "modbus.device: not a device path '%s'", a[1]);
+			snprintf(m.device, sizeof(m.device), "%s", a[1]);
+		} else if (!strcmp(a[0], "baud")) {
+			if (get_uint(c, "modbus", "baud", a[1], 1200, 4000000, &m.baud))
+				return -1;
+		} else if (!strcmp(a[0], "parity")) {
+			if (strcmp(a[1], "N") && strcmp(a[1], "E") && strcmp(a[1], "O"))
+				return fail(c, "modbus.parity: N, E or O '%s'", a[1]);
+			m.parity = a[1][0];
+		} else if (!strcmp(a[0], "stop_bits")) {
+			if (get_uint(c, "modbus", "stop_bits", a[1], 1, 2, &m.stop_bits))
+				return -1;
+		} else if (!strcmp(a[0], "timeout_ms")) {
+			if (get_uint(c, "modbus", "timeout_ms", a[1], 1, 1000, &m.timeout_ms))
+				return -1;
+		} else if (!strcmp(a[0], "retries")) {
+			if (get_uint(c, "modbus", "retries", a[1], 0, 10, &m.retries))
+				return -1;
+		} else {
+			return fail(c, "modbus.%s: unknown attribute", a[0]);
+		}
+	}
+	if (bus == UINT32_MAX)
+		return fail(c, "modbus.bus: required");
+	if (!m.device[0])
+		return fail(c, "modbus.device: required");
+	for (int i = 0; i < BK_REG_COUNT; i++)
+		if (!have_reg[i])
+			return fail(c, "modbus.%s: required", reg_names[i]);
+	if (c->b->bus[bus].used)
+		return fail(c, "modbus.bus: duplicate '%u'", bus);
+	m.used = true;
+	c->b->bus[bus] = m;
+	return 0;
+}
+
+static int power_elem(bctx_t *c, const XML_Char **a)
+{
+	for (; a[0]; a += 2) {
+		if (strcmp(a[0], "settle_ms") != 0)
+			return fail(c, "power.%s: unknown attribute", a[0]);
+		if (get_uint(c, "power", "settle_ms", a[1], 0, 50, &c->b->settle_ms))
+			return -1;
+	}
+	return 0;
+}
+
+static int battery_elem(bctx_t *c, const XML_Char **a)
+{
+	backend_cfg_t *b = c->b;
+	for (; a[0]; a += 2) {
+		if (!strcmp(a[0], "source")) {
+			if (!strcmp(a[1], "fixed"))
+				b->battery_source = BK_BATTERY_FIXED;
+			else if (!strcmp(a[1], "iio"))
+				b->battery_source = BK_BATTERY_IIO;
+			else
+				return fail(c, "battery.source: unknown source '%s'", a[1]);
+		} else if (!strcmp(a[0], "mv")) {
+			if (get_uint(c, "battery", "mv", a[1], 0, 1000000, &b->battery_mv))
+				return -1;
+		} else if (!strcmp(a[0], "path")) {
+			if (strlen(a[1]) >= sizeof(b->battery_path) || a[1][0] != '/')
+				return fail(c, "battery.path: not an absolute path '%s'", a[1]);
+			snprintf(b->battery_path, sizeof(b->battery_path), "%s", a[1]);
+		} else if (!strcmp(a[0], "scale")) {
+			char *end;
+			double d = strtod(a[1], &end);
+			if (a[1][0] == '\0' || *end != '\0' || !isfinite(d))
+				return fail(c, "battery.scale: not a number '%s'", a[1]);
+			if (d <= 0.0 || d > 1e6)
+				return fail(c, "battery.scale: out of range (0, 1e6] '%s'", a[1]);
+			b->battery_scale = d;
+		} else {
+			return fail(c, "battery.%s: unknown attribute", a[0]);
+		}
+	}
+	if (b->battery_source == BK_BATTERY_IIO && b->battery_path[0] == '\0')
+		return fail(c, "battery.path: required with source iio");
+	return 0;
+}
+
+static int line_elem(bctx_t *c, const XML_Char **a)
+{
+	bk_line_t l = {0};
+	int fn = -1;
+	uint32_t axis = UINT32_MAX;
+	bool have_line = false;
+	for (; a[0]; a += 2) {
+		if (!strcmp(a[0], "function")) {
+			for (int i = 0; i <= BK_LINE_SERVO0; i++)
+				if (!strcmp(a[1], line_names[i]))
+					fn = i;
+			if (fn < 0)
+				return fail(c, "line.function: unknown function '%s'", a[1]);
+		} else if (!strcmp(a[0], "chip")) {
+			if (a[1][0] == '\0' || strlen(a[1]) >= sizeof(l.chip))
+				return fail(c, "line.chip: bad chip name '%s'", a[1]);
+			snprintf(l.chip, sizeof(l.chip), "%s", a[1]);
+		} else if (!strcmp(a[0], "line")) {
+			if (get_uint(c, "line", "line", a[1], 0, 65535, &l.line))
+				return -1;
+			have_line = true;
+		} else if (!strcmp(a[0], "active_low")) {
+			if (get_bool(c, "line", "active_low", a[1], &l.active_low))
+				return -1;
+		} else if (!strcmp(a[0], "axis")) {
+			if (get_uint(c, "line", "axis", a[1], 0, VS_MAX_AXES - 1, &axis))
+				return -1;
+		} else {
+			return fail(c, "line.%s: unknown attribute", a[0]);
+		}
+	}
+	if (fn < 0)
+		return fail(c, "line.function: required");
+	if (!l.chip[0] || !have_line)
+		return fail(c, "line.%s: required", l.chip[0] ? "line" : "chip");
+	if (fn == BK_LINE_SERVO0) {
+		if (axis == UINT32_MAX)
+			return fail(c, "line.axis: required for servo_enable");
+		fn += (int)axis;
+	} else if (axis != UINT32_MAX) {
+		return fail(c, "line.axis: only for servo_enable");
+	}
+	if (c->b->lines[fn].used)
+		return fail(c, "line.function: duplicate '%s'", line_names[fn < BK_LINE_SERVO0 ? fn : BK_LINE_SERVO0]);
+	l.used = true;
+	c->b->lines[fn] = l;
+	return 0;
+}
+
+static int joystick_elem(bctx_t *c, const XML_Char **a)
+{
+	static const char *const ax[3] = {"x", "y", "rotation"};
+	bk_joystick_t *j = &c->b->joystick;
+	if (j->used)
+		return fail(c, "joystick: duplicate element");
+	for (; a[0]; a += 2) {
+		int hit = 0;
+		if (!strcmp(a[0], "device")) {
+			if (a[1][0] != '/' || strlen(a[1]) >= sizeof(j->device))
+				return fail(c, "joystick.device: not a device path '%s'", a[1]);
+			snprintf(j->device, sizeof(j->device), "%s", a[1]);
+			continue;
+		}
+		for (int i = 0; i < 3 && !hit; i++) {
+			char n[32];
+			if (!strcmp(a[0], ax[i])) {
+				int code = libevdev_event_code_from_name(EV_ABS, a[1]);
+				if (code < 0)
+					return fail(c, "joystick.%s: not an ABS_ axis '%s'", a[0], a[1]);
+				j->code[i] = code;
+				hit = 1;
+			}
+			snprintf(n, sizeof(n), "%s_invert", ax[i]);
+			if (!hit && !strcmp(a[0], n)) {
+				if (get_bool(c, "joystick", n, a[1], &j->invert[i]))
+					return -1;
+				hit = 1;
+			}
+			snprintf(n, sizeof(n), "%s_scale", ax[i]);
+			if (!hit && !strcmp(a[0], n)) {
+				char *end;
+				double d = strtod(a[1], &end);
+				if (a[1][0] == '\0' || *end != '\0' || !isfinite(d))
+					return fail(c, "joystick.%s: not a number '%s'", n, a[1]);
+				if (d < 0.0 || d > 1.0)
+					return fail(c, "joystick.%s: out of range 0..1 '%s'", n, a[1]);
+				j->scale[i] = d;
+				hit = 1;
+			}
+		}
+		if (!hit)
+			return fail(c, "joystick.%s: unknown attribute", a[0]);
+	}
+	if (!j->device[0])
+		return fail(c, "joystick.device: required");
+	if (j->code[0] < 0 || j->code[2] < 0)
+		return fail(c, "joystick.%s: required", j->code[0] < 0 ? "x" : "rotation");
+	j->used = true;
+	return 0;
+}
+
+static void XMLCALL on_start(void *ud, const XML_Char *name, const XML_Char **atts)
+{
+	bctx_t *c = ud;
+	int depth = c->depth++;
+	if (c->failed)
+		return;
+	if (depth == 1 && !strcmp(name, "backends")) {
+		if (atts[0])
+			fail(c, "backends.%s: unknown attribute", atts[0]);
+		c->in_backends = true;
+		return;
+	}
+	if (!c->in_backends)
+		return; /* the core loader judges the rest */
+	if (depth != 2)
+		fail(c, "%s: unknown element", name);
+	else if (!strcmp(name, "drive"))
+		drive_elem(c, atts);
+	else if (!strcmp(name, "modbus"))
+		modbus_elem(c, atts);
+	else if (!strcmp(name, "power"))
+		power_elem(c, atts);
+	else if (!strcmp(name, "battery"))
+		battery_elem(c, atts);
+	else if (!strcmp(name, "line"))
+		line_elem(c, atts);
+	else if (!strcmp(name, "joystick"))
+		joystick_elem(c, atts);
+	else
+		fail(c, "%s: unknown element", name);
+}
+
+static void XMLCALL on_end(void *ud, const XML_Char *name)
+{
+	(void)name;
+	bctx_t *c = ud;
+	if (--c->depth == 1)
+		c->in_backends = false;
+}
+
+int backend_cfg_load(const char *path, backend_cfg_t *b, char *err, size_t errlen)
+{
+	bctx_t c = {.path = path, .err = err, .errlen = errlen, .b = b};
+	backend_cfg_defaults(b);
+	FILE *f = fopen(path, "rb");
+	if (!f)
+		return fail(&c, "cannot open: %s", strerror(errno));
+	char *buf = malloc(MAX_FILE_BYTES + 1);
+	if (!buf) {
+		fclose(f);
+		return fail(&c, "out of memory");
+	}
+	size_t n = fread(buf, 1, MAX_FILE_BYTES + 1, f);
+	fclose(f);
+	if (n > MAX_FILE_BYTES) {
+		free(buf);
+		return fail(&c, "file too large");
+	}
+	c.p = XML_ParserCreate(NULL);
+	if (!c.p) {
+		free(buf);
+		return fail(&c, "out of memory");
+	}
+	XML_SetUserData(c.p, &c);
+	XML_SetElementHandler(c.p, on_start, on_end);
+	if (XML_Parse(c.p, buf, (int)n, XML_TRUE) == XML_STATUS_ERROR && !c.failed)
+		fail(&c, "xml: %s", XML_ErrorString(XML_GetErrorCode(c.p)));
+	XML_ParserFree(c.p);
+	c.p = NULL;
+	free(buf);
+	if (c.failed)
+		return -1;
+	/* Cross-references, once every element is known. */
+	for (unsigned i = 0; i < VS_MAX_AXES; i++)
+		if (b->drive_type[i] == BK_DRIVE_MODBUS && !b->bus[b->drive_bus[i]].used) {
+			c.at_line = c.drive_line[i];
+			return fail(&c, "drive.bus: no <modbus bus=\"%u\"> for axis %u",
+				    b->drive_bus[i], i);
+		}
+	return 0;
+}

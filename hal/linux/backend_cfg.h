@@ -1,0 +1,124 @@
+/* vehicle-fw's backend section of the vehicle file (expat).
+ *
+ * The core loader (hal/config_xml.c) skips <backends>; this parser reads
+ * only that subtree, with the same error style:
+ *   "<file>:<line>: <element>.<attribute>: <what> '<value>'"
+ *
+ *   <vehicle ...>
+ *     <backends>
+ *       <drive axis="0" type="loopback"/>      one per axis; type: loopback | modbus
+ *       <drive axis="1" type="modbus" bus="0" unit="2"/>
+ *       <modbus bus="0" device="/dev/ttyUSB0" baud="115200" parity="N" stop_bits="1"
+ *               timeout_ms="20" retries="1" reg_target_speed="0" reg_position="2"
+ *               reg_status="4" reg_alarm="5" reg_servo_on="6" reg_fault_reset="7"/>
+ *       <power settle_ms="20"/>                relay settle time, 0..50
+ *       <battery source="fixed" mv="24000"/>   source: fixed | iio (path, scale)
+ *       <line function="estop" chip="gpiochip0" line="3" active_low="true"/>
+ *       <joystick device="/dev/input/event3" x="ABS_Y" x_invert="true"
+ *                 rotation="ABS_X" rotation_invert="true" x_scale="1.0"/>
+ *     </backends>
+ *   </vehicle>
+ *
+ * line functions: contact, obstacle, obstacle_caution, estop (inputs), relay
+ * (output), relay_feedback (input), servo_enable (output, with axis="N").
+ * A function not given has no line: its input reads inactive; without a
+ * relay line the relay is simulated (feedback follows the command); without
+ * relay_feedback a relay line's feedback is its commanded state.
+ *
+ * modbus drive: Modbus RTU over libmodbus, one thread per bus (hal/linux/
+ * modbus_drive.h for the register semantics). Every reg_* is required;
+ * addresses 0..65535, holding registers.
+ *
+ * joystick: an evdev device (libevdev). x, y, rotation name the absolute
+ * axes (ABS_*; y may be omitted); each axis's range maps to +-32767 (full
+ * velocity limit), times its *_scale (0..1), sign flipped by *_invert. The
+ * firmware applies <devices joystick_deadband>. Without <joystick> the
+ * joystick reads absent.
+ *
+ * loopback drive: an ideal drive in software (position integrates the
+ * velocity setpoint), for bench runs of the Linux build without hardware.
+ * An axis without <drive> defaults to loopback.
+ */
+#ifndef HAL_LINUX_BACKEND_CFG_H
+#define HAL_LINUX_BACKEND_CFG_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "../../firmware/config.h"
+#include "../config_xml.h"
+
+enum { BK_DRIVE_LOOPBACK = 0, BK_DRIVE_MODBUS = 1 };
+#define BK_MODBUS_BUSES 2
+
+enum {
+	BK_REG_TARGET_SPEED = 0, /* int32, 2 registers, high word first: counts/s */
+	BK_REG_POSITION,         /* int32, 2 registers: counts */
+	BK_REG_STATUS,           /* bit 0: power stage enabled */
+	BK_REG_ALARM,            /* the drive's alarm code, 0: none */
+	BK_REG_SERVO_ON,         /* written 1/0 */
+	BK_REG_FAULT_RESET,      /* written 1 to reset a fault */
+	BK_REG_COUNT,
+};
+
+typedef struct {
+	bool used;
+	char device[128];
+	uint32_t baud;
+	char parity; /* 'N', 'E', 'O' */
+	uint32_t stop_bits;
+	uint32_t timeout_ms; /* per request */
+	uint32_t retries;    /* further attempts after the first */
+	uint32_t reg[BK_REG_COUNT];
+} bk_modbus_bus_t;
+enum { BK_BATTERY_FIXED = 0, BK_BATTERY_IIO = 1 };
+
+enum {
+	BK_LINE_CONTACT = 0,
+	BK_LINE_OBSTACLE,
+	BK_LINE_CAUTION,
+	BK_LINE_ESTOP,
+	BK_LINE_RELAY,
+	BK_LINE_RELAY_FB,
+	BK_LINE_SERVO0, /* servo_enable of axis 0; axis i at BK_LINE_SERVO0 + i */
+	BK_LINE_COUNT = BK_LINE_SERVO0 + VS_MAX_AXES,
+};
+
+typedef struct {
+	bool used;
+	bool active_low;
+	uint32_t line;
+	char chip[HAL_IO_CHIP_MAX];
+} bk_line_t;
+
+typedef struct {
+	bool used;
+	char device[256];
+	int code[3]; /* ABS_* of x, y, rotation; -1: none */
+	bool invert[3];
+	double scale[3];
+} bk_joystick_t;
+
+typedef struct {
+	uint8_t drive_type[VS_MAX_AXES];
+	uint8_t drive_bus[VS_MAX_AXES];  /* modbus: bus index */
+	uint8_t drive_unit[VS_MAX_AXES]; /* modbus: unit id 1..247 */
+	bk_modbus_bus_t bus[BK_MODBUS_BUSES];
+	uint32_t settle_ms;
+	uint8_t battery_source;
+	uint32_t battery_mv;        /* fixed */
+	char battery_path[256];     /* iio: a sysfs *_raw file */
+	double battery_scale;       /* iio: mV per raw count */
+	bk_line_t lines[BK_LINE_COUNT];
+	bk_joystick_t joystick;
+} backend_cfg_t;
+
+void backend_cfg_defaults(backend_cfg_t *b);
+/* Reads <backends> of the vehicle file at path (absent: defaults). -1 with
+ * one line in err on error. */
+int backend_cfg_load(const char *path, backend_cfg_t *b, char *err, size_t errlen);
+/* Name of a line function, for messages. */
+const char *backend_line_name(unsigned fn);
+
+#endif

@@ -1,0 +1,98 @@
+#!/usr/bin/python3
+"""Independent check of mbdrive-sim's register map with pymodbus (Debian's
+python3-pymodbus), the client side of the bus that vehicle-fw uses.
+
+    mb_crosscheck.py PORT SIM_PID
+
+Prints one "crosscheck: FAIL: ..." line and exits 1 on the first mismatch,
+"crosscheck: PASS" at the end.
+"""
+import os
+import signal
+import sys
+import time
+
+from pymodbus.client import ModbusSerialClient
+
+BASE = 0x100
+SPEED, POS, STATUS, ALARM, SERVO, RESET = 0, 2, 4, 5, 6, 7
+
+
+def fail(msg):
+    print("crosscheck: FAIL: " + msg)
+    sys.exit(1)
+
+
+def s32(hi, lo):
+    v = (hi << 16) | lo
+    return v - (1 << 32) if v & 0x80000000 else v
+
+
+def main():
+    port, sim = sys.argv[1], int(sys.argv[2])
+    # Whole seconds: pymodbus 3.0 truncates the timeout to an int.
+    c = ModbusSerialClient(port=port, baudrate=115200, timeout=1)
+    if not c.connect():
+        fail("cannot open " + port)
+
+    def regs(unit):
+        r = c.read_holding_registers(BASE, 8, slave=unit)
+        if r.isError():
+            fail("unit %d: read: %s" % (unit, r))
+        return r.registers
+
+    def write(unit, off, values):
+        r = c.write_registers(BASE + off, values, slave=unit)
+        if r.isError():
+            fail("unit %d: write %#x: %s" % (unit, BASE + off, r))
+
+    def expect(what, got, want):
+        if got != want:
+            fail("%s: got %r, expected %r" % (what, got, want))
+
+    r = regs(1)
+    expect("unit 1 at start: position, status, alarm", (s32(r[POS], r[POS + 1]), r[STATUS], r[ALARM]), (0, 0, 0))
+
+    # Servo on and +100000 counts/s (int32, high word first): the
+    # position grows at that rate; status bit 0 set.
+    write(1, SERVO, [1])
+    write(1, SPEED, [0x0001, 0x86A0])
+    t0 = time.monotonic()
+    time.sleep(0.3)
+    r = regs(1)
+    dt = time.monotonic() - t0
+    pos = s32(r[POS], r[POS + 1])
+    expect("unit 1 status with servo on", r[STATUS], 1)
+    expect("unit 1 target speed readback", (r[SPEED], r[SPEED + 1]), (0x0001, 0x86A0))
+    if not 100000 * (dt - 0.1) < pos <= 100000 * (dt + 0.01):
+        fail("unit 1 position after %.3f s at 100000 counts/s: %d" % (dt, pos))
+
+    # Negative speed: two's complement across both registers.
+    write(1, SPEED, [0xFFFF, 0xEC78])  # -5000
+    time.sleep(0.2)
+    p2 = s32(*regs(1)[POS:POS + 2])
+    if not p2 < pos + 100000 * 0.05:
+        fail("unit 1 position did not fall at -5000 counts/s: %d then %d" % (pos, p2))
+
+    # Unit 2 on the same bus is independent.
+    r = regs(2)
+    expect("unit 2 untouched", (s32(r[POS], r[POS + 1]), r[STATUS], r[SERVO]), (0, 0, 0))
+
+    # The drive's alarm: status drops; fault reset clears it.
+    os.kill(sim, signal.SIGUSR2)
+    time.sleep(0.05)
+    r = regs(1)
+    expect("unit 1 alarm code", r[ALARM], 0x31)
+    expect("unit 1 status with alarm", r[STATUS], 0)
+    write(1, RESET, [1])
+    r = regs(1)
+    expect("unit 1 after fault reset: alarm, status", (r[ALARM], r[STATUS]), (0, 1))
+
+    write(1, SPEED, [0, 0])
+    write(1, SERVO, [0])
+    expect("unit 1 status with servo off", regs(1)[STATUS], 0)
+    c.close()
+    print("crosscheck: PASS")
+
+
+main()

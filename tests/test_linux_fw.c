@@ -1,0 +1,497 @@
+/* vehicle-fw on the host: the <backends> section, and the program itself
+ * with loopback drives, its serial link on a pty driven by the client
+ * library, and SIGTERM mid-move. */
+#include <errno.h>
+#include <fcntl.h>
+#include <libgen.h>
+#include <poll.h>
+#include <pty.h>
+#include <setjmp.h>
+#include <signal.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+#include <termios.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <cmocka.h>
+
+#include "../hal/config_xml.h"
+#include "../hal/linux/backend_cfg.h"
+#include "../hal/linux/joystick.h"
+#include <linux/input.h>
+#include "../proto/client.h"
+
+static char BUILD_DIR[512] = "build";
+static char DIR_[] = "/tmp/vsfwXXXXXX";
+static char VPATH[600], IOPATH[600], LOGPATH[600];
+
+static void write_file(const char *path, const char *text)
+{
+	FILE *f = fopen(path, "w");
+	assert_non_null(f);
+	assert_int_equal(fputs(text, f) >= 0, 1);
+	assert_int_equal(fclose(f), 0);
+}
+
+#define VEHICLE_HEAD                                                                            \
+	"<vehicle kinematics=\"differential\" tick_hz=\"100\">\n"                               \
+	"  <devices contact_sensor=\"false\" obstacle_input=\"false\" estop=\"false\"\n"        \
+	"           joystick=\"false\"/>\n"
+
+/* ---- <backends> ------------------------------------------------------ */
+
+static void test_backends_parsed(void **state)
+{
+	(void)state;
+	write_file(VPATH, VEHICLE_HEAD
+		   "  <backends>\n"
+		   "    <drive axis=\"1\" type=\"loopback\"/>\n"
+		   "    <power settle_ms=\"35\"/>\n"
+		   "    <battery source=\"iio\" path=\"/sys/x/in_voltage0_raw\" scale=\"12.5\"/>\n"
+		   "    <line function=\"estop\" chip=\"gpiochip1\" line=\"3\" active_low=\"true\"/>\n"
+		   "    <line function=\"servo_enable\" axis=\"1\" chip=\"vs-testchip\" line=\"9\"/>\n"
+		   "  </backends>\n"
+		   "</vehicle>\n");
+	backend_cfg_t b;
+	char err[256] = "";
+	assert_int_equal(backend_cfg_load(VPATH, &b, err, sizeof(err)), 0);
+	assert_int_equal(b.drive_type[1], BK_DRIVE_LOOPBACK);
+	assert_int_equal(b.settle_ms, 35);
+	assert_int_equal(b.battery_source, BK_BATTERY_IIO);
+	assert_string_equal(b.battery_path, "/sys/x/in_voltage0_raw");
+	assert_true(b.battery_scale == 12.5);
+	assert_true(b.lines[BK_LINE_ESTOP].used);
+	assert_true(b.lines[BK_LINE_ESTOP].active_low);
+	assert_int_equal(b.lines[BK_LINE_ESTOP].line, 3);
+	assert_string_equal(b.lines[BK_LINE_ESTOP].chip, "gpiochip1");
+	assert_true(b.lines[BK_LINE_SERVO0 + 1].used);
+	assert_false(b.lines[BK_LINE_SERVO0 + 1].active_low);
+	assert_int_equal(b.lines[BK_LINE_SERVO0 + 1].line, 9);
+	assert_false(b.lines[BK_LINE_SERVO0].used);
+	assert_false(b.lines[BK_LINE_RELAY].used);
+	assert_false(b.bus[0].used);
+
+	/* A Modbus bus and its drive. */
+	write_file(VPATH, VEHICLE_HEAD
+		   "  <backends>\n"
+		   "    <modbus bus=\"1\" device=\"/dev/ttyUSB0\" baud=\"57600\" parity=\"E\"\n"
+		   "            stop_bits=\"2\" timeout_ms=\"25\" retries=\"3\" reg_target_speed=\"16\"\n"
+		   "            reg_position=\"18\" reg_status=\"20\" reg_alarm=\"21\"\n"
+		   "            reg_servo_on=\"40\" reg_fault_reset=\"41\"/>\n"
+		   "    <drive axis=\"0\" type=\"modbus\" bus=\"1\" unit=\"7\"/>\n"
+		   "  </backends>\n"
+		   "</vehicle>\n");
+	assert_int_equal(backend_cfg_load(VPATH, &b, err, sizeof(err)), 0);
+	assert_int_equal(b.drive_type[0], BK_DRIVE_MODBUS);
+	assert_int_equal(b.drive_bus[0], 1);
+	assert_int_equal(b.drive_unit[0], 7);
+	assert_true(b.bus[1].used);
+	assert_string_equal(b.bus[1].device, "/dev/ttyUSB0");
+	assert_int_equal(b.bus[1].baud, 57600);
+	assert_int_equal(b.bus[1].parity, 'E');
+	assert_int_equal(b.bus[1].stop_bits, 2);
+	assert_int_equal(b.bus[1].timeout_ms, 25);
+	assert_int_equal(b.bus[1].retries, 3);
+	assert_int_equal(b.bus[1].reg[BK_REG_TARGET_SPEED], 16);
+	assert_int_equal(b.bus[1].reg[BK_REG_POSITION], 18);
+	assert_int_equal(b.bus[1].reg[BK_REG_STATUS], 20);
+	assert_int_equal(b.bus[1].reg[BK_REG_ALARM], 21);
+	assert_int_equal(b.bus[1].reg[BK_REG_SERVO_ON], 40);
+	assert_int_equal(b.bus[1].reg[BK_REG_FAULT_RESET], 41);
+	assert_int_equal(b.drive_type[1], BK_DRIVE_LOOPBACK);
+
+	/* The core loader skips the section and still reads the rest. */
+	vs_config_t cfg;
+	assert_int_equal(config_load(VPATH, NULL, &cfg, NULL, err, sizeof(err)), 0);
+	assert_int_equal(cfg.tick_hz, 100);
+	assert_false(cfg.has_estop);
+}
+
+static void test_backends_defaults(void **state)
+{
+	(void)state;
+	write_file(VPATH, VEHICLE_HEAD "</vehicle>\n");
+	backend_cfg_t b;
+	char err[256] = "";
+	assert_int_equal(backend_cfg_load(VPATH, &b, err, sizeof(err)), 0);
+	assert_int_equal(b.drive_type[0], BK_DRIVE_LOOPBACK);
+	assert_int_equal(b.settle_ms, 20);
+	assert_int_equal(b.battery_source, BK_BATTERY_FIXED);
+	assert_int_equal(b.battery_mv, 24000);
+	for (unsigned i = 0; i < BK_LINE_COUNT; i++)
+		assert_false(b.lines[i].used);
+}
+
+/* Each bad section: the exact message, with file and line. */
+static void test_backends_errors(void **state)
+{
+	(void)state;
+	static const struct {
+		const char *body, *msg;
+	} cases[] = {
+	    {"<drive axis=\"0\" type=\"stepper\"/>", "drive.type: unknown backend 'stepper'"},
+	    {"<drive axis=\"4\" type=\"loopback\"/>", "drive.axis: out of range 0..3 '4'"},
+	    {"<drive type=\"loopback\"/>", "drive.axis: required"},
+	    {"<power settle_ms=\"51\"/>", "power.settle_ms: out of range 0..50 '51'"},
+	    {"<power settle_ms=\"2x\"/>", "power.settle_ms: not a number '2x'"},
+	    {"<battery source=\"iio\"/>", "battery.path: required with source iio"},
+	    {"<battery scale=\"nan\"/>", "battery.scale: not a number 'nan'"},
+	    {"<line function=\"horn\" chip=\"c\" line=\"1\"/>", "line.function: unknown function 'horn'"},
+	    {"<line function=\"estop\" line=\"1\"/>", "line.chip: required"},
+	    {"<line function=\"estop\" chip=\"c\" line=\"1\" active_low=\"yes\"/>",
+	     "line.active_low: not a boolean 'yes'"},
+	    {"<line function=\"servo_enable\" chip=\"c\" line=\"1\"/>",
+	     "line.axis: required for servo_enable"},
+	    {"<line function=\"relay\" chip=\"c\" line=\"1\" axis=\"0\"/>",
+	     "line.axis: only for servo_enable"},
+	    {"<line function=\"relay\" chip=\"c\" line=\"1\"/><line function=\"relay\" chip=\"c\" "
+	     "line=\"2\"/>",
+	     "line.function: duplicate 'relay'"},
+	    {"<drive axis=\"0\" type=\"loopback\" speed=\"1\"/>", "drive.speed: unknown attribute"},
+	    {"<relay/>", "relay: unknown element"},
+	    {"<joystick device=\"/dev/input/event0\" x=\"ABS_FOO\" rotation=\"ABS_X\"/>",
+	     "joystick.x: not an ABS_ axis 'ABS_FOO'"},
+	    {"<joystick device=\"/dev/input/event0\" x=\"ABS_X\"/>", "joystick.rotation: required"},
+	    {"<joystick x=\"ABS_X\" rotation=\"ABS_RX\"/>", "joystick.device: required"},
+	    {"<joystick device=\"/dev/input/event0\" x=\"ABS_X\" rotation=\"ABS_RX\" "
+	     "x_scale=\"1.5\"/>",
+	     "joystick.x_scale: out of range 0..1 '1.5'"},
+	    {"<joystick device=\"/dev/input/event0\" x=\"ABS_X\" rotation=\"ABS_RX\" "
+	     "y_invert=\"maybe\"/>",
+	     "joystick.y_invert: not a boolean 'maybe'"},
+	    {"<drive axis=\"0\" type=\"modbus\" unit=\"1\"/>", "drive.bus: required for modbus"},
+	    {"<drive axis=\"0\" type=\"modbus\" bus=\"0\" unit=\"248\"/>",
+	     "drive.unit: out of range 1..247 '248'"},
+	    {"<drive axis=\"0\" type=\"loopback\" unit=\"1\"/>", "drive.unit: only for modbus"},
+	    {"<drive axis=\"0\" type=\"modbus\" bus=\"1\" unit=\"1\"/>",
+	     "drive.bus: no <modbus bus=\"1\"> for axis 0"},
+	    {"<modbus bus=\"0\" device=\"/dev/ttyUSB0\"/>", "modbus.reg_target_speed: required"},
+	    {"<modbus bus=\"0\" device=\"/dev/ttyUSB0\" parity=\"X\"/>",
+	     "modbus.parity: N, E or O 'X'"},
+	    {"<modbus bus=\"0\" device=\"ttyUSB0\"/>", "modbus.device: not a device path 'ttyUSB0'"},
+	    {"<modbus bus=\"0\" device=\"/dev/ttyUSB0\" timeout_ms=\"0\"/>",
+	     "modbus.timeout_ms: out of range 1..1000 '0'"},
+	    {"<drive axis=\"0\" type=\"loopback\"><x/></drive>", "x: unknown element"},
+	};
+	for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
+		char text[1024], want[1024], err[256] = "";
+		backend_cfg_t b;
+		snprintf(text, sizeof(text), VEHICLE_HEAD "  <backends>\n%s\n  </backends>\n</vehicle>\n",
+			 cases[i].body);
+		write_file(VPATH, text);
+		assert_int_equal(backend_cfg_load(VPATH, &b, err, sizeof(err)), -1);
+		snprintf(want, sizeof(want), "%s:5: %s", VPATH, cases[i].msg);
+		assert_string_equal(err, want);
+	}
+
+	/* A second section is the core loader's error. */
+	write_file(VPATH, VEHICLE_HEAD "<backends/>\n<backends/>\n</vehicle>\n");
+	vs_config_t cfg;
+	char err[256], want[700];
+	assert_int_equal(config_load(VPATH, NULL, &cfg, NULL, err, sizeof(err)), -1);
+	snprintf(want, sizeof(want), "%s:5: backends: duplicate element (first at line 4)", VPATH);
+	assert_string_equal(err, want);
+}
+
+/* Joystick section and the axis scaling, from a device state set by hand
+ * (the evdev path itself runs in the QEMU guest, tests/qemu/fw_joystick.sh). */
+static void test_joystick_cfg_and_scaling(void **state)
+{
+	(void)state;
+	write_file(VPATH, VEHICLE_HEAD
+		   "  <backends>\n"
+		   "    <joystick device=\"/dev/input/event7\" x=\"ABS_Y\" x_invert=\"true\"\n"
+		   "              rotation=\"ABS_RX\" rotation_scale=\"0.5\"/>\n"
+		   "  </backends>\n"
+		   "</vehicle>\n");
+	backend_cfg_t b;
+	char err[256] = "";
+	assert_int_equal(backend_cfg_load(VPATH, &b, err, sizeof(err)), 0);
+	assert_true(b.joystick.used);
+	assert_string_equal(b.joystick.device, "/dev/input/event7");
+	assert_int_equal(b.joystick.code[0], ABS_Y);
+	assert_int_equal(b.joystick.code[1], -1);
+	assert_int_equal(b.joystick.code[2], ABS_RX);
+	assert_true(b.joystick.invert[0] && !b.joystick.invert[2]);
+	assert_true(b.joystick.scale[2] == 0.5 && b.joystick.scale[0] == 1.0);
+
+	/* 0..1023 device: ends to -+32767 (x inverted), rotation at half scale. */
+	ljoy_t j;
+	ljoy_init(&j, &b.joystick, 0); /* no such device: absent */
+	hal_joystick_t js;
+	ljoy_read(&j, &js);
+	assert_false(js.present);
+	j.present = true;
+	for (int i = 0; i < 3; i++) {
+		j.min[i] = 0;
+		j.max[i] = 1023;
+	}
+	j.raw[0] = 1023;
+	j.raw[2] = 0;
+	ljoy_read(&j, &js);
+	assert_true(js.present);
+	assert_int_equal(js.axis[0], -32767);
+	assert_int_equal(js.axis[1], 0);
+	assert_int_equal(js.axis[2], -16383);
+	j.raw[0] = 0;
+	j.raw[2] = 1023;
+	ljoy_read(&j, &js);
+	assert_int_equal(js.axis[0], 32767);
+	assert_int_equal(js.axis[2], 16383);
+	/* 512 is half a count above centre (511.5): 32767 / 1023 = 32. */
+	j.raw[0] = 512;
+	ljoy_read(&j, &js);
+	assert_int_equal(js.axis[0], -32);
+	j.present = false;
+	j.fd = -1;
+}
+
+/* The shipped example loads with both loaders. */
+static void test_example_config(void **state)
+{
+	(void)state;
+	backend_cfg_t b;
+	vs_config_t cfg;
+	hal_io_map_t io;
+	char err[512] = "";
+	assert_int_equal(config_load("config/vehicle-linux.xml", "config/io.xml", &cfg, &io, err,
+				     sizeof(err)),
+			 0);
+	assert_int_equal(backend_cfg_load("config/vehicle-linux.xml", &b, err, sizeof(err)), 0);
+	assert_int_equal(cfg.tick_hz, 1000);
+	assert_true(b.lines[BK_LINE_RELAY].used && b.lines[BK_LINE_RELAY_FB].used);
+	assert_true(b.lines[BK_LINE_ESTOP].active_low);
+	assert_true(b.lines[BK_LINE_SERVO0].used && b.lines[BK_LINE_SERVO0 + 1].used);
+}
+
+/* ---- the program ----------------------------------------------------- */
+
+static pid_t FW_PID = -1;
+static int MASTER = -1;
+
+static void start_fw(void)
+{
+	int slave;
+	char exe[600];
+
+	assert_int_equal(openpty(&MASTER, &slave, NULL, NULL, NULL), 0);
+	const char *path = ttyname(slave);
+	assert_non_null(path);
+	char port[256];
+	snprintf(port, sizeof(port), "%s", path);
+	struct termios t;
+	assert_int_equal(tcgetattr(MASTER, &t), 0);
+	cfmakeraw(&t);
+	assert_int_equal(tcsetattr(MASTER, TCSANOW, &t), 0);
+
+	snprintf(exe, sizeof(exe), "%s/vehicle-fw", BUILD_DIR);
+	FW_PID = fork();
+	assert_true(FW_PID >= 0);
+	if (FW_PID == 0) {
+		int fd = open(LOGPATH, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+		dup2(fd, 2);
+		execl(exe, exe, "--config", VPATH, "--io", IOPATH, "--port", port, "--rt-priority",
+		      "0", (char *)NULL);
+		_exit(127);
+	}
+	close(slave); /* vehicle-fw opens the port by name */
+}
+
+static int stop_fw(void)
+{
+	int status = 0;
+	assert_int_equal(kill(FW_PID, SIGTERM), 0);
+	assert_int_equal(waitpid(FW_PID, &status, 0), FW_PID);
+	FW_PID = -1;
+	assert_true(WIFEXITED(status));
+	return WEXITSTATUS(status);
+}
+
+static void read_log(char *buf, size_t cap)
+{
+	FILE *f = fopen(LOGPATH, "r");
+	assert_non_null(f);
+	size_t n = fread(buf, 1, cap - 1, f);
+	buf[n] = '\0';
+	fclose(f);
+}
+
+/* One console line on the raw link; the reply line without its newline. */
+static void console(const char *line, char *reply, size_t cap)
+{
+	size_t n = 0;
+	assert_int_equal(write(MASTER, line, strlen(line)), (ssize_t)strlen(line));
+	assert_int_equal(write(MASTER, "\n", 1), 1);
+	while (n + 1 < cap) {
+		struct pollfd p = {.fd = MASTER, .events = POLLIN};
+		assert_int_equal(poll(&p, 1, 2000), 1);
+		assert_int_equal(read(MASTER, reply + n, 1), 1);
+		if (reply[n] == '\n')
+			break;
+		n++;
+	}
+	reply[n] = '\0';
+}
+
+static void sleep_ms(long ms)
+{
+	struct timespec ts = {ms / 1000, (ms % 1000) * 1000000L};
+	while (nanosleep(&ts, &ts) != 0 && errno == EINTR)
+		;
+}
+
+static void write_fw_config(void)
+{
+	write_file(VPATH, VEHICLE_HEAD
+		   "  <backends>\n"
+		   "    <drive axis=\"0\" type=\"loopback\"/>\n"
+		   "    <drive axis=\"1\" type=\"loopback\"/>\n"
+		   "    <battery source=\"fixed\" mv=\"23500\"/>\n"
+		   "  </backends>\n"
+		   "</vehicle>\n");
+	write_file(IOPATH, "<io>\n  <input id=\"1\" name=\"dock\"/>\n</io>\n");
+}
+
+static void test_fw_link_and_sigterm_mid_move(void **state)
+{
+	(void)state;
+	char reply[512], log[8192];
+	write_fw_config();
+	start_fw();
+
+	/* The console answers first (the program may still be starting). */
+	sleep_ms(200);
+	/* The configured 23500 mV, in the interface's 0.1 V units. */
+	console("getBatteryVoltage", reply, sizeof(reply));
+	assert_string_equal(reply, "ok true 235.000");
+	console("$rt", reply, sizeof(reply));
+	assert_memory_equal(reply, "ok period_us 10000 ticks ", 25);
+	assert_non_null(strstr(reply, " sched other prio 0 "));
+
+	/* Binary frames on the same port, through the client library. */
+	vc_client_t c;
+	bool ret = false;
+	assert_int_equal(vc_attach_serial_fd(&c, MASTER, false), VC_OK);
+	assert_int_equal(vc_setPower(&c, &ret, true), VC_OK);
+	assert_true(ret);
+	assert_int_equal(vc_setServo(&c, &ret, true), VC_OK);
+	assert_true(ret);
+	/* 2 m at the default 500 mm/s: several seconds of motion. */
+	assert_int_equal(vc_moveForward(&c, &ret, 2000.0), VC_OK);
+	assert_true(ret);
+	sleep_ms(500);
+	int16_t st = 0;
+	char msg[VS_STATE_MSG_MAX];
+	assert_int_equal(vc_getState(&c, &ret, &st, msg), VC_OK);
+	if (st != VS_STATE_BUSY) {
+		/* Say why (e.g. a tick overrun on an overloaded host). */
+		int16_t na = 0;
+		uint16_t len = 0;
+		vs_alarm_t al[4];
+		vc_getActiveAlarm(&c, &ret, 4, &na, al, &len);
+		for (uint16_t i = 0; i < len; i++)
+			print_message("active alarm %d\n", (int)al[i].code);
+	}
+	assert_int_equal(st, VS_STATE_BUSY);
+	vs_position_t pos;
+	assert_int_equal(vc_getPosition(&c, &ret, &pos), VC_OK);
+	/* Loopback drives move the odometry: accelerating, not yet at 2 m. */
+	assert_true(pos.x > 20.0 && pos.x < 1500.0);
+	vc_close(&c);
+
+	assert_int_equal(stop_fw(), 0);
+	read_log(log, sizeof(log));
+	/* Decelerated (not cut), then servo off and power off. */
+	assert_non_null(strstr(log, "vehicle-fw: signal: stopping the unit\n"));
+	assert_non_null(strstr(log, "vehicle-fw: shutdown: stopped after "));
+	assert_non_null(
+	    strstr(log, "vehicle-fw: final state: unpowered, relay open, servo off, stopped\n"));
+	assert_non_null(strstr(log, "vehicle-fw: exit: "));
+	close(MASTER);
+	MASTER = -1;
+}
+
+/* SIGTERM while idle and unpowered: a clean exit without a deceleration. */
+static void test_fw_sigterm_idle(void **state)
+{
+	(void)state;
+	char log[8192];
+	write_fw_config();
+	start_fw();
+	sleep_ms(200);
+	assert_int_equal(stop_fw(), 0);
+	read_log(log, sizeof(log));
+	assert_null(strstr(log, "shutdown: stopped after"));
+	assert_non_null(
+	    strstr(log, "vehicle-fw: final state: unpowered, relay open, servo off, stopped\n"));
+	close(MASTER);
+	MASTER = -1;
+}
+
+/* Start-up errors: exit status 1 and one message. */
+static void test_fw_bad_config(void **state)
+{
+	(void)state;
+	char cmd[2048], out[1024], want[1024];
+	write_file(VPATH, VEHICLE_HEAD "<backends><power settle_ms=\"99\"/></backends></vehicle>\n");
+	snprintf(cmd, sizeof(cmd), "%s/vehicle-fw --config %s --io %s --rt-priority 0 2>&1", BUILD_DIR,
+		 VPATH, IOPATH);
+	FILE *p = popen(cmd, "r");
+	assert_non_null(p);
+	size_t n = fread(out, 1, sizeof(out) - 1, p);
+	out[n] = '\0';
+	assert_int_equal(pclose(p), 1 << 8);
+	snprintf(want, sizeof(want),
+		 "vehicle-fw: error: %s:4: power.settle_ms: out of range 0..50 '99'\n", VPATH);
+	assert_string_equal(out, want);
+}
+
+static int teardown(void **state)
+{
+	(void)state;
+	if (FW_PID > 0) {
+		kill(FW_PID, SIGKILL);
+		waitpid(FW_PID, NULL, 0);
+		FW_PID = -1;
+	}
+	if (MASTER >= 0)
+		close(MASTER);
+	MASTER = -1;
+	return 0;
+}
+
+int main(int argc, char **argv)
+{
+	const struct CMUnitTest tests[] = {
+	    cmocka_unit_test(test_backends_parsed),
+	    cmocka_unit_test(test_backends_defaults),
+	    cmocka_unit_test(test_backends_errors),
+	    cmocka_unit_test(test_example_config),
+	    cmocka_unit_test(test_joystick_cfg_and_scaling),
+	    cmocka_unit_test_teardown(test_fw_link_and_sigterm_mid_move, teardown),
+	    cmocka_unit_test_teardown(test_fw_sigterm_idle, teardown),
+	    cmocka_unit_test_teardown(test_fw_bad_config, teardown),
+	};
+	if (argc > 0) {
+		char tmp[512];
+		snprintf(tmp, sizeof(tmp), "%s", argv[0]);
+		snprintf(BUILD_DIR, sizeof(BUILD_DIR), "%s", dirname(dirname(tmp)));
+	}
+	if (!mkdtemp(DIR_))
+		return 1;
+	snprintf(VPATH, sizeof(VPATH), "%s/vehicle.xml", DIR_);
+	snprintf(IOPATH, sizeof(IOPATH), "%s/io.xml", DIR_);
+	snprintf(LOGPATH, sizeof(LOGPATH), "%s/fw.log", DIR_);
+	signal(SIGPIPE, SIG_IGN);
+	int rc = cmocka_run_group_tests(tests, NULL, NULL);
+	unlink(VPATH);
+	unlink(IOPATH);
+	unlink(LOGPATH);
+	rmdir(DIR_);
+	return rc;
+}
