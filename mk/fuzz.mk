@@ -25,7 +25,9 @@ FUZZ_ALL := $(patsubst tests/fuzz/%.c,%,$(wildcard tests/fuzz/fuzz_*.c))
 FUZZ_TARGETS ?= $(FUZZ_ALL)
 FUZZ_BINS := $(addprefix $(FUZZ_BUILD)/,$(FUZZ_ALL))
 # libFuzzer options shared by every run: a hang is a finding (10 s per input).
-FUZZ_OPTS := -timeout=10 -rss_limit_mb=2048 -print_final_stats=1
+# FUZZ_SEED=N makes a run repeatable (CI uses one); 0 lets libFuzzer pick.
+FUZZ_SEED ?= 0
+FUZZ_OPTS := -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 -seed=$(FUZZ_SEED)
 
 # fuzz-run-* must not be .PHONY: make skips pattern rules for phony targets
 # (they would silently do nothing); FORCE makes them run every time instead.
