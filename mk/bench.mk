@@ -23,5 +23,5 @@ $(BENCH_PROGS):
 	@$(if $(Q),echo "  LD      $@")
 	$(Q)$(CC) $(LDFLAGS) -o $@ $^ $(LDLIBS_HOST)
 
-bench: $(BENCH_PROGS)
+bench: $(BENCH_PROGS) $(BUILD)/linkbench
 	$(Q)CC="$(CC)" OPT="$(OPT)" tools/bench/bench.sh $(BENCH_DIR) $(BENCH_SECS)

@@ -43,3 +43,7 @@ echo
 
 echo "== 4. 1 kHz loop lateness on Linux (clock_nanosleep TIMER_ABSTIME, vehicle_tick on the cruise route) =="
 "$dir/looplat" "$secs"
+echo
+
+echo "== 5. command link: getPosition round trip over a pty next to its time on a 115200 8N1 wire =="
+"$(dirname "$dir")/linkbench"
