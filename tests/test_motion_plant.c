@@ -302,6 +302,54 @@ static void test_set_velocity_while_moving(void **state)
 	assert_acc_within_1pct(r);
 }
 
+/* The mecanum base end to end: sideways and diagonal motion with a heading
+ * change in one straight move, y jog, and the same commands the
+ * differential base refuses. */
+static void test_omni_base(void **state)
+{
+	rig_t *r = *state;
+	vs_config_t cfg;
+	vs_config_defaults(&cfg);
+	cfg.kinematics = VS_KIN_OMNI;
+	cfg.wheel_base_mm = 350;
+	/* A quarter of the fine encoder: the mecanum wheel's fastest setpoint
+	 * must still fit the drive's counts/s range (vs_config_check). */
+	cfg.encoder_counts_per_rev = PLANT_HIRES_COUNTS_PER_REV / 4;
+	plant_params_t pp;
+	plant_params_ideal(&pp);
+	const char *bad = NULL;
+	if (sim_init_ex(&r->sim, &cfg, &pp, &bad) != 0)
+		fail_msg("omni configuration refused: %s", bad ? bad : "?");
+	sim_set_tick_cb(&r->sim, on_tick, r);
+	exec_ok(r, "setPower true", "ok true");
+	exec_ok(r, "setServo true", "ok true");
+	exec_ok(r, "setVelocity 400 60", "ok true");
+	exec_ok(r, "setAcceleration 300 120", "ok true");
+	r->n = 0;
+	exec_ok(r, "moveLinearRel 0 500 0", "ok true");
+	run_until_ready(r, 30000);
+	exec_ok(r, "moveLinearAbs 800 -300 -60", "ok true");
+	run_until_ready(r, 30000);
+	sim_run_ms(&r->sim, 200);
+	sample_t *e = &r->s[r->n - 1];
+	printf("omni: at %.4f %.4f %.4f (true %.4f %.4f %.4f)\n", e->x, e->y, e->th, e->tx, e->ty,
+	       e->tth);
+	assert_true(hypot(e->x - 800, e->y + 300) <= 0.05);
+	assert_true(hypot(e->tx - 800, e->ty + 300) <= 0.05);
+	assert_true(angle_err(e->th, -60) <= 0.01 && angle_err(e->tth, -60) <= 0.01);
+	assert_acc_within_1pct(r);
+	/* A sideways jog moves along y in the vehicle frame. */
+	exec_ok(r, "setPosition 0 0 0", "ok true");
+	exec_ok(r, "setJogTimeout 200", "ok true");
+	exec_ok(r, "moveJog 0 200 0", "ok true");
+	run_until_ready(r, 10000);
+	sim_run_ms(&r->sim, 100);
+	e = &r->s[r->n - 1];
+	assert_true(e->y > 10 && fabs(e->x) < 0.05 && angle_err(e->th, 0) < 0.01);
+	exec_ok(r, "moveCircularRel 200 0 90", "ok true");
+	run_until_ready(r, 30000);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -312,6 +360,7 @@ int main(void)
 		cmocka_unit_test_setup_teardown(test_continuous_retarget_is_smooth, setup, teardown),
 		cmocka_unit_test_setup_teardown(test_jog_watchdog, setup, teardown),
 		cmocka_unit_test_setup_teardown(test_set_velocity_while_moving, setup, teardown),
+		cmocka_unit_test_setup_teardown(test_omni_base, setup, teardown),
 	};
 	return cmocka_run_group_tests_name("motion on the ideal plant", tests, NULL, NULL);
 }
