@@ -920,6 +920,28 @@ static q32_t slew(q32_t x, q32_t target, q32_t step)
 	return target;
 }
 
+/* Move the translation (x, y) toward its target by at most step as a
+ * vector: component-wise steps would let a diagonal accelerate at sqrt(2)
+ * times the limit on an omni base. */
+static void slew2(q32_t *x, q32_t *y, q32_t tx, q32_t ty, q32_t step)
+{
+	q32_t dx = tx - *x, dy = ty - *y;
+	if (dy == 0 || dx == 0) {
+		*x = slew(*x, tx, step);
+		*y = slew(*y, ty, step);
+		return;
+	}
+	q32_t len = fx_hypot(dx, dy);
+	if (len <= step) {
+		*x = tx;
+		*y = ty;
+		return;
+	}
+	/* Unit direction (Q30) times the step: exact to a raw unit. */
+	*x += fx_mul_q30(step, (int32_t)(fx_div(dx, len) >> 2));
+	*y += fx_mul_q30(step, (int32_t)(fx_div(dy, len) >> 2));
+}
+
 static bool twist_zero(const fx_twist_t *t) { return t->vx_pt == 0 && t->vy_pt == 0 && t->w_pt == 0; }
 
 /* Jog and joystick: slew toward the target velocity. */
@@ -940,8 +962,7 @@ static void velocity_tick(motion_t *m, fx_twist_t *out)
 	tgt.vx_pt = fx_clamp64(tgt.vx_pt, -vt, vt);
 	tgt.vy_pt = fx_clamp64(tgt.vy_pt, -vt, vt);
 	tgt.w_pt = fx_clamp64(tgt.w_pt, -m->v_r_pt, m->v_r_pt);
-	m->vel.vx_pt = slew(m->vel.vx_pt, tgt.vx_pt, at);
-	m->vel.vy_pt = slew(m->vel.vy_pt, tgt.vy_pt, at);
+	slew2(&m->vel.vx_pt, &m->vel.vy_pt, tgt.vx_pt, tgt.vy_pt, at);
 	m->vel.w_pt = slew(m->vel.w_pt, tgt.w_pt, ar);
 	*out = m->vel;
 	if (twist_zero(&m->vel) && twist_zero(&tgt)) {
@@ -997,8 +1018,7 @@ static void continuous_tick(motion_t *m, fx_twist_t *out)
 		ar = m->amax_r_pt2;
 	}
 	q32_t prev_vx = m->vel.vx_pt;
-	m->vel.vx_pt = slew(m->vel.vx_pt, want.vx_pt, at);
-	m->vel.vy_pt = slew(m->vel.vy_pt, want.vy_pt, at);
+	slew2(&m->vel.vx_pt, &m->vel.vy_pt, want.vx_pt, want.vy_pt, at);
 	m->vel.w_pt = slew(m->vel.w_pt, want.w_pt, ar);
 	/* Never step past the goal: the last step covers the exact remainder. */
 	if (!m->goal_position_done && m->vel.vx_pt > dist && m->p.kin == MOTION_KIN_DIFF)

@@ -71,6 +71,7 @@ static bool armed;          /* a command may be moving the unit */
 static double rest_x, rest_y, rest_th;
 static bool have_rest;
 static fx_twist_t prev_cmd;
+static double prev_world[2]; /* previous commanded translation, world frame */
 static bool prev_servo;
 /* A frozen encoder was injected: the wheel loop then drives that wheel
  * until 203/204 stop it, so a resting unit may move by up to the
@@ -139,11 +140,28 @@ static void check_tick(void)
 		abort(); /* velocity limit */
 	if (c->kinematics == VS_KIN_DIFF && t->vy_pt != 0)
 		abort();
+	/* The commanded translation changes by at most the limit in the frame
+	 * it is commanded in: the world for path moves (a mecanum base that
+	 * turns while it translates changes its body-frame components by
+	 * v * w at constant world velocity), the vehicle for jog, joystick and
+	 * continuous moves (a turning jog is an arc: its centripetal v * w is
+	 * not a change of the command). Either frame's bound is accepted. The
+	 * twist comes from Q30 trigonometry, so 16 raw units (4e-9 mm/tick^2)
+	 * of slack. */
+	double th = (double)v->motion.ref.th_deg / q * M_PI / 180.0;
+	double wx = (double)t->vx_pt * cos(th) - (double)t->vy_pt * sin(th);
+	double wy = (double)t->vx_pt * sin(th) + (double)t->vy_pt * cos(th);
+	bool omni = c->kinematics == VS_KIN_OMNI;
+	bool trans_over =
+	    omni ? hypot(wx - prev_world[0], wy - prev_world[1]) > at + 16 &&
+			   hypot((double)(t->vx_pt - prev_cmd.vx_pt),
+				 (double)(t->vy_pt - prev_cmd.vy_pt)) > at + 16
+		 : fabs((double)(t->vx_pt - prev_cmd.vx_pt)) > at;
 	if (prev_servo && v->servo &&
-	    (fabs((double)(t->vx_pt - prev_cmd.vx_pt)) > at ||
-	     fabs((double)(t->vy_pt - prev_cmd.vy_pt)) > at ||
-	     fabs((double)(t->w_pt - prev_cmd.w_pt)) > ar))
+	    (trans_over || fabs((double)(t->w_pt - prev_cmd.w_pt)) > ar))
 		abort(); /* acceleration limit */
+	prev_world[0] = wx;
+	prev_world[1] = wy;
 	if (alarm_any_fault(&v->alarms) || !v->powered) {
 		if (v->servo)
 			abort();
@@ -346,6 +364,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	encoder_frozen = false;
 	prev_servo = false;
 	prev_cmd = (fx_twist_t){0, 0, 0};
+	prev_world[0] = prev_world[1] = 0;
 	for (unsigned k = 0; k < MAX_ACTIONS && r.i < r.n; k++) {
 		bool go = act(&r, &ticks);
 		/* A servo that went off between two ticks (even if switched on
