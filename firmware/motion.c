@@ -111,8 +111,14 @@ void motion_set_pose(motion_t *m, const fx_pose_t *p)
 		map_dir(&f, &m->seg.ux, &m->seg.uy);
 	}
 	map_pose(&f, &m->goal);
-	m->ref = *p;
-	m->ref.th_deg = fx_wrap_deg(p->th_deg);
+	if (m->mode == MODE_IDLE) {
+		m->ref = *p;
+		m->ref.th_deg = fx_wrap_deg(p->th_deg);
+	} else {
+		/* Moving: the reference goes through the same rounding as the
+		 * piece it is on, so the next step has no nanometre jump. */
+		map_pose(&f, &m->ref);
+	}
 }
 
 /* Effective translation speed limit (set value, caution cap). */
@@ -694,8 +700,10 @@ static void piece_limits(const motion_t *m, q32_t *vmax, q32_t *a)
 		*vmax = vt_eff(m);
 		*a = m->a_t_pt2;
 		if (g->dth != 0) {
-			*vmax = fx_min64(*vmax, fx_mul(m->v_r_pt, g->omni_k));
-			*a = fx_min64(*a, fx_mul(m->a_r_pt2, g->omni_k));
+			/* omni_k is rounded: keep 1/4096 below the rotation limits. */
+			q32_t vr = fx_mul(m->v_r_pt, g->omni_k), ar = fx_mul(m->a_r_pt2, g->omni_k);
+			*vmax = fx_min64(*vmax, vr - (vr >> 12));
+			*a = fx_min64(*a, ar - (ar >> 12));
 		}
 		break;
 	case SEG_CORNER:
@@ -741,8 +749,10 @@ static void piece_pose(motion_t *m, q32_t s_old, q32_t s, fx_pose_t *out)
 		out->x_mm = g->p0.x_mm + fx_mul_q30(s, g->ux);
 		out->y_mm = g->p0.y_mm + fx_mul_q30(s, g->uy);
 		if (g->dth != 0) {
-			q32_t turned = fx_div(s, g->omni_k);
-			out->th_deg = fx_wrap_deg(g->p0.th_deg + (g->dth < 0 ? -turned : turned));
+			/* The fraction of the line covered, Q30: exactly 1 at its
+			 * end, so the heading arrives on dth without a final step. */
+			int32_t frac = (int32_t)(fx_div(s, g->len) >> 2);
+			out->th_deg = fx_wrap_deg(g->p0.th_deg + fx_mul_q30(g->dth, frac));
 		}
 		break;
 	case SEG_TURN:
@@ -840,7 +850,10 @@ static void path_tick(motion_t *m, fx_twist_t *out)
 					amax = fx_min64(m->amax_r_pt2, fx_div(m->amax_t_pt2, m->seg.arc_k));
 				else if (m->seg.kind == SEG_LINE && m->seg.dth != 0)
 					/* Heading turns with the path: both limits bind. */
-					amax = fx_min64(amax, fx_mul(m->amax_r_pt2, m->seg.omni_k));
+				{
+					q32_t ar = fx_mul(m->amax_r_pt2, m->seg.omni_k);
+					amax = fx_min64(amax, ar - (ar >> 12));
+				}
 				else if (m->seg.kind == SEG_CORNER)
 					/* Half the rotational limit for braking, the other
 					 * half is the curvature change (traj.h). */
