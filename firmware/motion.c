@@ -570,17 +570,32 @@ static bool next_piece(motion_t *m)
 			q32_t dx = c->target.x_mm - r->x_mm, dy = c->target.y_mm - r->y_mm;
 			q32_t dist = fx_hypot(dx, dy);
 			if (m->p.kin == MOTION_KIN_OMNI) {
-				if (c->stage++ > 0)
-					return false;
-				if (dist < TINY_MM) {
-					q32_t a = fx_wrap_deg(c->target.th_deg - r->th_deg);
+				/* Translation and rotation together, unless the move is
+				 * mostly rotation (under 1 mm per degree): then the
+				 * heading would ride on a tiny path ratio, so turn
+				 * first and then translate. */
+				q32_t a = fx_wrap_deg(c->target.th_deg - r->th_deg);
+				bool split = fx_abs64(a) > FX_ONE / 1000 && dist < fx_abs64(a);
+				switch (c->stage++) {
+				case 0:
+					if (dist >= TINY_MM && !split) {
+						c->stage = 2;
+						seg_line(m, r, c->target.x_mm, c->target.y_mm,
+							 c->target.th_deg);
+						return true;
+					}
 					if (fx_abs64(a) < 1)
 						continue;
 					seg_turn(m, a);
 					return true;
+				case 1:
+					if (dist < TINY_MM)
+						continue;
+					seg_line(m, r, c->target.x_mm, c->target.y_mm, r->th_deg);
+					return true;
+				default:
+					return false;
 				}
-				seg_line(m, r, c->target.x_mm, c->target.y_mm, c->target.th_deg);
-				return true;
 			}
 			switch (c->stage++) {
 			case 0: {
