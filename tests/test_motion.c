@@ -279,6 +279,67 @@ static void test_set_pose_while_moving(void **state)
 	assert_true(fabs(d(r.m.ref.th_deg) - 90.0) < 1e-6);
 }
 
+/* Mecanum velocity modes: a diagonal jog accelerates as a vector within the
+ * set acceleration; a continuous goal with y lands; a rotation-dominant
+ * straight move turns first and lands exactly. */
+static void test_omni_modes(void **state)
+{
+	(void)state;
+	rig_t r;
+	rig_init(&r, MOTION_KIN_OMNI);
+	motion_set_jog_timeout_ms(&r.m, 300);
+	assert_true(motion_jog(&r.m, q(300), q(300), 0));
+	double vxp = 0, vyp = 0, amax = 0;
+	for (int i = 0; i < 3000 && motion_has_work(&r.m); i++) {
+		fx_twist_t t;
+		fx_pose_t meas = r.m.ref;
+		motion_tick(&r.m, &meas, &t);
+		double vx = d(t.vx_pt) * HZ, vy = d(t.vy_pt) * HZ;
+		amax = fmax(amax, hypot(vx - vxp, vy - vyp) * HZ);
+		vxp = vx;
+		vyp = vy;
+	}
+	assert_false(motion_has_work(&r.m));
+	assert_true(amax <= 500.0 * 1.0001);
+	assert_true(amax >= 499.0);
+
+	fx_pose_t goal = {q(400), q(-250), q(30)};
+	fx_pose_t start = r.m.ref;
+	assert_true(motion_continuous_rel(&r.m, &goal));
+	run_until_idle(&r, 30000);
+	(void)start;
+	assert_true(fabs(d(r.m.ref.th_deg) - 30.0) < 1e-6);
+
+	fx_pose_t here = r.m.ref;
+	fx_pose_t p = {here.x_mm + q(0.5), here.y_mm, q(-150)};
+	assert_true(motion_linear_abs(&r.m, &p));
+	run_until_idle(&r, 30000);
+	assert_int_equal(r.m.ref.x_mm, p.x_mm);
+	assert_int_equal(r.m.ref.y_mm, p.y_mm);
+	assert_int_equal(r.m.ref.th_deg, q(-150));
+}
+
+/* setPosition during an arc keeps its course: no velocity step. */
+static void test_set_pose_during_arc(void **state)
+{
+	(void)state;
+	rig_t r;
+	rig_init(&r, MOTION_KIN_DIFF);
+	assert_true(motion_circular_rel(&r.m, 0, q(500), q(90)));
+	for (int i = 0; i < 1200; i++)
+		rig_tick(&r);
+	double swept = d(r.m.ref.th_deg);
+	fx_pose_t np = {q(10), q(20), q(-45)};
+	motion_set_pose(&r.m, &np);
+	run_until_idle(&r, 30000);
+	/* The landing step carries the mapping's nanometre rounding: the
+	 * spec's 1 % bound (without a redefinition it holds exactly, above). */
+	assert_true(r.ax_max <= 500.0 * 1.01);
+	assert_true(r.aw_max <= 180.0 * 1.01);
+	/* The rest of the sweep, from the redefined heading. */
+	assert_true(fabs(d(r.m.ref.th_deg) - (-45.0 + 90.0 - swept)) < 1e-6);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -292,6 +353,8 @@ int main(void)
 		cmocka_unit_test(test_omni_linear),
 		cmocka_unit_test(test_arc_quarter),
 		cmocka_unit_test(test_set_pose_while_moving),
+		cmocka_unit_test(test_omni_modes),
+		cmocka_unit_test(test_set_pose_during_arc),
 	};
 	return cmocka_run_group_tests_name("motion", tests, NULL, NULL);
 }
