@@ -27,17 +27,6 @@ q32_t fx_mul_portable(q32_t a, q32_t b)
 	return neg ? -(int64_t)r : (int64_t)r;
 }
 
-int64_t fx_muldiv(int64_t a, int64_t num, int64_t den)
-{
-	bool neg = (a < 0) != (num < 0);
-	uint64_t ua = (uint64_t)fx_abs64(a), un = (uint64_t)fx_abs64(num), ud = (uint64_t)den;
-	uint64_t q = ua / ud, r = ua % ud;
-	/* a*num/den = q*num + r*num/den; r < den keeps r*num small for the
-	 * operand sizes used here (den and num below 2^32). */
-	uint64_t res = q * un + (r * un) / ud;
-	return neg ? -(int64_t)res : (int64_t)res;
-}
-
 uint64_t fx_isqrt64(uint64_t v)
 {
 	uint64_t res = 0, bit = (uint64_t)1 << 62;

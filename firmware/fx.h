@@ -32,9 +32,6 @@ static inline q32_t fx_from_int(int32_t v) { return (q32_t)((uint64_t)(int64_t)v
 
 /* (a * b) >> 32 for two Q32 values, rounded to nearest; saturates on overflow. */
 
-/* a * num / den with a 64-bit numerator product guarded: exact when |a*num|
- * fits in 63 bits, otherwise computed in two steps. den > 0. Rounds toward 0. */
-int64_t fx_muldiv(int64_t a, int64_t num, int64_t den);
 
 /* Floor of the square root of a 64-bit unsigned value. */
 uint64_t fx_isqrt64(uint64_t v);

@@ -27,7 +27,6 @@ typedef struct {
 	uint8_t n;         /* wheels */
 	uint32_t tick_hz;
 	q32_t counts_per_mm;   /* Q32 */
-	q32_t mm_per_count;    /* Q32 */
 	/* Wheel travel (mm) per degree of body rotation, Q32: (T/2)*pi/180 on a
 	 * differential base, ((L+T)/2)*pi/180 on mecanum. */
 	q32_t mm_per_deg;

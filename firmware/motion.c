@@ -155,9 +155,6 @@ static bool push(motion_t *m, const motion_cmd_t *c)
 {
 	if (queue_full(m))
 		return false;
-	if (m->mode != MODE_IDLE && m->mode != MODE_PATH && m->q_count == 0 &&
-	    m->mode != MODE_JOG && m->mode != MODE_CONTINUOUS && m->mode != MODE_JOYSTICK)
-		return false;
 	*q_at(m, m->q_count) = *c;
 	m->q_count++;
 	if (m->mode == MODE_IDLE)
@@ -1112,8 +1109,8 @@ bool motion_is_moving(const motion_t *m) { return !twist_zero(&m->vel) || m->v !
 
 bool motion_has_work(const motion_t *m)
 {
-	return m->mode != MODE_IDLE && !(m->mode == MODE_JOYSTICK && !motion_is_moving(m)) ? true
-											    : motion_is_moving(m);
+	/* An enabled joystick at rest is not work: the unit is waiting. */
+	return (m->mode != MODE_IDLE && m->mode != MODE_JOYSTICK) || motion_is_moving(m);
 }
 
 bool motion_is_paused(const motion_t *m) { return m->paused; }

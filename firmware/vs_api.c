@@ -119,7 +119,6 @@ int vehicle_init(vehicle_t *v, const vs_config_t *cfg, const vs_hal_t *hal, cons
 	    .n = v->naxes,
 	    .tick_hz = cfg->tick_hz,
 	    .counts_per_mm = to_q32(counts_per_mm),
-	    .mm_per_count = to_q32(1.0 / counts_per_mm),
 	    .mm_per_deg = to_q32(mm_per_deg),
 	    .deg_per_mm = to_q32(1.0 / mm_per_deg),
 	    .kp_q16 = (int64_t)(cfg->wheel_kp_per_s * 65536.0 + 0.5),

@@ -12,18 +12,6 @@
 #include "firmware/kin.h"
 #include "firmware/traj.h"
 
-static void test_muldiv_truncates_toward_zero(void **state)
-{
-	(void)state;
-	/* 30 / 4 = 7.5 */
-	assert_int_equal(fx_muldiv(10, 3, 4), 7);
-	assert_int_equal(fx_muldiv(-10, 3, 4), -7);
-	assert_int_equal(fx_muldiv(10, -3, 4), -7);
-	assert_int_equal(fx_muldiv(-10, -3, 4), 7);
-	/* 2^40 * 3 / 7 = 471219269046.857... (remainder path: 2^40 mod 7 = 2) */
-	assert_int_equal(fx_muldiv((int64_t)1 << 40, 3, 7), 471219269046);
-}
-
 static void test_mul_portable_saturates(void **state)
 {
 	(void)state;
@@ -114,7 +102,6 @@ static kin_params_t params(uint8_t kin)
 	    .n = kin == MOTION_KIN_OMNI ? 4 : 2,
 	    .tick_hz = 1000,
 	    .counts_per_mm = FX_ONE,
-	    .mm_per_count = FX_ONE,
 	    .mm_per_deg = 2 * FX_ONE,
 	    .deg_per_mm = FX_ONE / 2,
 	    .kp_q16 = 0,
@@ -211,7 +198,6 @@ static void test_kin_setpoint_saturates(void **state)
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
-	    cmocka_unit_test(test_muldiv_truncates_toward_zero),
 	    cmocka_unit_test(test_mul_portable_saturates),
 	    cmocka_unit_test(test_angles_far_out),
 	    cmocka_unit_test(test_div_saturates),

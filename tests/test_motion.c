@@ -303,11 +303,14 @@ static void test_omni_modes(void **state)
 	assert_true(amax <= 500.0 * 1.0001);
 	assert_true(amax >= 499.0);
 
-	fx_pose_t goal = {q(400), q(-250), q(30)};
+	/* The jog did not turn, so the goal's vehicle frame is the world's. */
+	assert_int_equal(r.m.ref.th_deg, 0);
 	fx_pose_t start = r.m.ref;
+	fx_pose_t goal = {q(400), q(-250), q(30)};
 	assert_true(motion_continuous_rel(&r.m, &goal));
 	run_until_idle(&r, 30000);
-	(void)start;
+	assert_true(fabs(d(r.m.ref.x_mm - start.x_mm) - 400.0) < 1e-6);
+	assert_true(fabs(d(r.m.ref.y_mm - start.y_mm) + 250.0) < 1e-6);
 	assert_true(fabs(d(r.m.ref.th_deg) - 30.0) < 1e-6);
 
 	fx_pose_t here = r.m.ref;

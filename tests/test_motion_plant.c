@@ -67,21 +67,30 @@ static void exec_ok(rig_t *r, const char *line, const char *want)
 		fail_msg("'%s' -> '%s', want '%s'", line, reply, want);
 }
 
-static int setup(void **state)
+/* Starts the firmware on the ideal plant with cfg, powered and servoed,
+ * at the set speeds used throughout, with an empty trace. */
+static void rig_start(rig_t *r, const vs_config_t *cfg)
 {
-	rig_t *r = calloc(1, sizeof *r);
-	vs_config_t cfg;
-	vs_config_defaults(&cfg);
-	cfg.encoder_counts_per_rev = PLANT_HIRES_COUNTS_PER_REV;
 	plant_params_t pp;
 	plant_params_ideal(&pp);
-	assert_int_equal(sim_init(&r->sim, &cfg, &pp), 0);
+	const char *bad = NULL;
+	if (sim_init_ex(&r->sim, cfg, &pp, &bad) != 0)
+		fail_msg("configuration refused: %s", bad ? bad : "?");
 	sim_set_tick_cb(&r->sim, on_tick, r);
 	exec_ok(r, "setPower true", "ok true");
 	exec_ok(r, "setServo true", "ok true");
 	exec_ok(r, "setVelocity 400 60", "ok true");
 	exec_ok(r, "setAcceleration 300 120", "ok true");
 	r->n = 0;
+}
+
+static int setup(void **state)
+{
+	rig_t *r = calloc(1, sizeof *r);
+	vs_config_t cfg;
+	vs_config_defaults(&cfg);
+	cfg.encoder_counts_per_rev = PLANT_HIRES_COUNTS_PER_REV;
+	rig_start(r, &cfg);
 	*state = r;
 	return 0;
 }
@@ -315,17 +324,7 @@ static void test_omni_base(void **state)
 	/* A quarter of the fine encoder: the mecanum wheel's fastest setpoint
 	 * must still fit the drive's counts/s range (vs_config_check). */
 	cfg.encoder_counts_per_rev = PLANT_HIRES_COUNTS_PER_REV / 4;
-	plant_params_t pp;
-	plant_params_ideal(&pp);
-	const char *bad = NULL;
-	if (sim_init_ex(&r->sim, &cfg, &pp, &bad) != 0)
-		fail_msg("omni configuration refused: %s", bad ? bad : "?");
-	sim_set_tick_cb(&r->sim, on_tick, r);
-	exec_ok(r, "setPower true", "ok true");
-	exec_ok(r, "setServo true", "ok true");
-	exec_ok(r, "setVelocity 400 60", "ok true");
-	exec_ok(r, "setAcceleration 300 120", "ok true");
-	r->n = 0;
+	rig_start(r, &cfg);
 	exec_ok(r, "moveLinearRel 0 500 0", "ok true");
 	run_until_ready(r, 30000);
 	exec_ok(r, "moveLinearAbs 800 -300 -60", "ok true");
