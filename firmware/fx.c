@@ -29,19 +29,19 @@ q32_t fx_mul_portable(q32_t a, q32_t b)
 
 uint64_t fx_isqrt64(uint64_t v)
 {
-	uint64_t res = 0, bit = (uint64_t)1 << 62;
-	while (bit > v)
-		bit >>= 2;
-	while (bit) {
-		if (v >= res + bit) {
-			v -= res + bit;
-			res = (res >> 1) + bit;
-		} else {
-			res >>= 1;
-		}
-		bit >>= 2;
+	if (v < 2)
+		return v;
+	/* Newton from 2^ceil(bits / 2) >= sqrt(v): the integer iteration falls
+	 * monotonically onto floor(sqrt(v)) in at most six steps for 64 bits,
+	 * each a hardware division (the bitwise method took 32 rounds). */
+	int bits = 64 - __builtin_clzll(v);
+	uint64_t x = (uint64_t)1 << ((bits + 1) / 2);
+	for (;;) {
+		uint64_t y = (x + v / x) >> 1;
+		if (y >= x)
+			return x;
+		x = y;
 	}
-	return res;
 }
 
 /* Taylor series on |x| <= pi/4 (Q30 radians), Horner form with Q30
@@ -49,10 +49,10 @@ uint64_t fx_isqrt64(uint64_t v)
 static int32_t sin_poly(int64_t x)
 {
 	int64_t x2 = (x * x) >> 30;
-	int64_t p = 2959;                   /* 1/9! */
-	p = -213044 + ((x2 * p) >> 30);     /* -1/7! */
-	p = 8947849 + ((x2 * p) >> 30);     /* 1/5! */
-	p = -178956971 + ((x2 * p) >> 30);  /* -1/3! */
+	int64_t p = 2959;		   /* 1/9! */
+	p = -213044 + ((x2 * p) >> 30);	   /* -1/7! */
+	p = 8947849 + ((x2 * p) >> 30);	   /* 1/5! */
+	p = -178956971 + ((x2 * p) >> 30); /* -1/3! */
 	p = FX_Q30_ONE + ((x2 * p) >> 30);
 	return (int32_t)((x * p) >> 30);
 }
@@ -60,11 +60,11 @@ static int32_t sin_poly(int64_t x)
 static int32_t cos_poly(int64_t x)
 {
 	int64_t x2 = (x * x) >> 30;
-	int64_t p = -296;                   /* -1/10! */
-	p = 26630 + ((x2 * p) >> 30);       /* 1/8! */
-	p = -1491308 + ((x2 * p) >> 30);    /* -1/6! */
-	p = 44739243 + ((x2 * p) >> 30);    /* 1/4! */
-	p = -536870912 + ((x2 * p) >> 30);  /* -1/2! */
+	int64_t p = -296;		   /* -1/10! */
+	p = 26630 + ((x2 * p) >> 30);	   /* 1/8! */
+	p = -1491308 + ((x2 * p) >> 30);   /* -1/6! */
+	p = 44739243 + ((x2 * p) >> 30);   /* 1/4! */
+	p = -536870912 + ((x2 * p) >> 30); /* -1/2! */
 	return (int32_t)(FX_Q30_ONE + ((x2 * p) >> 30));
 }
 
@@ -93,7 +93,10 @@ int32_t fx_sin_bam(uint32_t bam)
 	}
 }
 
-int32_t fx_cos_bam(uint32_t bam) { return fx_sin_bam(bam + (1u << 30)); }
+int32_t fx_cos_bam(uint32_t bam)
+{
+	return fx_sin_bam(bam + (1u << 30));
+}
 
 void fx_sincos_bam(uint32_t bam, int32_t *s, int32_t *c)
 {
@@ -132,12 +135,11 @@ void fx_sincos_bam(uint32_t bam, int32_t *s, int32_t *c)
 
 /* atan(2^-i) in Q32 degrees. */
 static const int64_t cordic_atan_deg[32] = {
-	193273528320, 114096026022, 60285206653, 30601712202, 15360239180, 7687607525,
-	3844741810,   1922488225,   961258780,   480631223,   240315841,   120157949,
-	60078978,     30039490,     15019745,    7509872,     3754936,     1877468,
-	938734,       469367,       234684,      117342,      58671,       29335,
-	14668,        7334,         3667,        1833,        917,         458,
-	229,          115};
+    193273528320, 114096026022, 60285206653, 30601712202, 15360239180, 7687607525, 3844741810,
+    1922488225,	  961258780,	480631223,   240315841,	  120157949,   60078978,   30039490,
+    15019745,	  7509872,	3754936,     1877468,	  938734,      469367,	   234684,
+    117342,	  58671,	29335,	     14668,	  7334,	       3667,	   1833,
+    917,	  458,		229,	     115};
 
 q32_t fx_atan2_deg(int64_t y, int64_t x)
 {
@@ -181,17 +183,20 @@ q32_t fx_atan2_deg(int64_t y, int64_t x)
 q32_t fx_hypot(q32_t x, q32_t y)
 {
 	uint64_t ax = (uint64_t)fx_abs64(x), ay = (uint64_t)fx_abs64(y);
-	int shift = 0;
-	while ((ax | ay) >> 31) {
-		ax >>= 1;
-		ay >>= 1;
-		shift++;
-	}
-	/* Keep as many bits as possible: scale up small vectors too. */
-	while (ax < ((uint64_t)1 << 30) && ay < ((uint64_t)1 << 30) && (ax | ay) && shift > -16) {
-		ax <<= 1;
-		ay <<= 1;
-		shift--;
+	uint64_t m = ax | ay;
+	if (m == 0)
+		return 0;
+	/* Normalise so the larger component has 31 significant bits (its
+	 * square sum fits in 64), scaling small vectors up by at most 2^16. */
+	int shift = 33 - __builtin_clzll(m); /* bit length - 31 */
+	if (shift < -16)
+		shift = -16;
+	if (shift > 0) {
+		ax >>= shift;
+		ay >>= shift;
+	} else {
+		ax <<= -shift;
+		ay <<= -shift;
 	}
 	uint64_t r = fx_isqrt64(ax * ax + ay * ay);
 	return shift >= 0 ? (q32_t)(r << shift) : (q32_t)(r >> -shift);

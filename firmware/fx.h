@@ -18,20 +18,17 @@
 
 typedef int64_t q32_t;
 
-#define FX_SHIFT 32
-#define FX_ONE ((q32_t)1 << FX_SHIFT)
+#define FX_SHIFT   32
+#define FX_ONE	   ((q32_t)1 << FX_SHIFT)
 #define FX_Q30_ONE ((int32_t)1 << 30)
 #define FX_DEG_180 ((q32_t)180 << FX_SHIFT)
 #define FX_DEG_360 ((q32_t)360 << FX_SHIFT)
 
 /* Integer part to Q32. */
-static inline q32_t fx_from_int(int32_t v) { return (q32_t)((uint64_t)(int64_t)v << FX_SHIFT); }
-
-/* (a * b) >> 30 for a Q32 (or any int64) and a Q30 factor, rounded to nearest,
- * without a 128-bit intermediate (two 32x32->64 products, cheap on Cortex-M4). */
-
-/* (a * b) >> 32 for two Q32 values, rounded to nearest; saturates on overflow. */
-
+static inline q32_t fx_from_int(int32_t v)
+{
+	return (q32_t)((uint64_t)(int64_t)v << FX_SHIFT);
+}
 
 /* Floor of the square root of a 64-bit unsigned value. */
 uint64_t fx_isqrt64(uint64_t v);
@@ -43,25 +40,33 @@ int32_t fx_cos_bam(uint32_t bam);
 /* Both at once (one reduction); identical to the two calls. */
 void fx_sincos_bam(uint32_t bam, int32_t *s, int32_t *c);
 
-/* Degrees (Q32) to binary angle, modulo one turn. */
-
 /* atan2(y, x) as Q32 degrees in [-180, 180). y and x in any common scale. */
 q32_t fx_atan2_deg(int64_t y, int64_t x);
 
 /* Euclidean length of (x, y), both Q32; result Q32. */
 q32_t fx_hypot(q32_t x, q32_t y);
 
-/* Wrap a Q32 angle in degrees into [-180, 180). */
-
-static inline int64_t fx_abs64(int64_t v) { return v < 0 ? -v : v; }
-static inline int64_t fx_min64(int64_t a, int64_t b) { return a < b ? a : b; }
-static inline int64_t fx_max64(int64_t a, int64_t b) { return a > b ? a : b; }
+static inline int64_t fx_abs64(int64_t v)
+{
+	return v < 0 ? -v : v;
+}
+static inline int64_t fx_min64(int64_t a, int64_t b)
+{
+	return a < b ? a : b;
+}
+static inline int64_t fx_max64(int64_t a, int64_t b)
+{
+	return a > b ? a : b;
+}
 static inline int64_t fx_clamp64(int64_t v, int64_t lo, int64_t hi)
 {
 	return v < lo ? lo : (v > hi ? hi : v);
 }
 
 /* The hot helpers are inline: the control tick calls them dozens of times. */
+
+/* (a * b) >> 30 for a Q32 (or any int64) and a Q30 factor, rounded to nearest,
+ * without a 128-bit intermediate (two 32x32->64 products, cheap on Cortex-M4). */
 static inline int64_t fx_mul_q30(int64_t a, int32_t b_q30)
 {
 	/* a = hi * 2^32 + lo, lo unsigned; each partial product fits in 64 bits. */
@@ -76,6 +81,7 @@ static inline int64_t fx_mul_q30(int64_t a, int32_t b_q30)
  * build without 128-bit integers (a Cortex-M) uses out of line. */
 q32_t fx_mul_portable(q32_t a, q32_t b);
 
+/* (a * b) >> 32 for two Q32 values, rounded to nearest; saturates on overflow. */
 static inline q32_t fx_mul(q32_t a, q32_t b)
 {
 	/* Both forms give the same bits, so a recorded run replays identically
@@ -92,6 +98,19 @@ static inline q32_t fx_mul(q32_t a, q32_t b)
 #endif
 }
 
+/* fx_mul for products the caller knows to fit in 64 bits: the same bits,
+ * without the saturation checks (per-tick quantities bounded by the
+ * configured limits). */
+static inline q32_t fx_mul_fit(q32_t a, q32_t b)
+{
+#ifdef __SIZEOF_INT128__
+	return (q32_t)(((__int128)a * b + ((__int128)1 << 31)) >> 32);
+#else
+	return fx_mul_portable(a, b);
+#endif
+}
+
+/* Wrap a Q32 angle in degrees into [-180, 180). */
 static inline q32_t fx_wrap_deg(q32_t deg)
 {
 	if (deg >= -FX_DEG_180 && deg < FX_DEG_180)
@@ -102,12 +121,32 @@ static inline q32_t fx_wrap_deg(q32_t deg)
 	return r - FX_DEG_180;
 }
 
+/* Degrees (Q32) to binary angle, modulo one turn. */
 static inline uint32_t fx_deg_to_bam(q32_t deg)
 {
 	q32_t w = fx_wrap_deg(deg);
 	/* deg * 2^32 / 360 in Q32 degrees is w / 360, rounded. */
 	int64_t b = (w >= 0 ? w + 180 : w - 180) / 360;
 	return (uint32_t)(int32_t)b;
+}
+
+/* The last angle's sine and cosine: a heading that holds still (a straight
+ * line) costs a comparison instead of an evaluation. */
+typedef struct {
+	uint32_t bam;
+	int32_t s, c;
+	bool valid;
+} fx_trig_cache_t;
+
+static inline void fx_sincos_cached(fx_trig_cache_t *tc, uint32_t bam, int32_t *s, int32_t *c)
+{
+	if (!tc->valid || tc->bam != bam) {
+		fx_sincos_bam(bam, &tc->s, &tc->c);
+		tc->bam = bam;
+		tc->valid = true;
+	}
+	*s = tc->s;
+	*c = tc->c;
 }
 
 #endif

@@ -64,10 +64,12 @@ void kin_step(kin_t *k, const fx_twist_t *body, const int32_t meas[], int32_t ou
 	if (!k->synced)
 		kin_sync(k, meas);
 	/* Body twist straight to wheel counts: at most three products a tick,
-	 * none at rest. */
-	q32_t x = body->vx_pt ? fx_mul(body->vx_pt, k->p.counts_per_mm) : 0;
-	q32_t y = body->vy_pt ? fx_mul(body->vy_pt, k->p.counts_per_mm) : 0;
-	q32_t r = body->w_pt ? fx_mul(body->w_pt, k->counts_per_deg) : 0;
+	 * none at rest. The twist is one tick of motion within the configured
+	 * speed limits, whose wheel rate config.c bounds below 2^23 counts/s:
+	 * the products fit. */
+	q32_t x = body->vx_pt ? fx_mul_fit(body->vx_pt, k->p.counts_per_mm) : 0;
+	q32_t y = body->vy_pt ? fx_mul_fit(body->vy_pt, k->p.counts_per_mm) : 0;
+	q32_t r = body->w_pt ? fx_mul_fit(body->w_pt, k->counts_per_deg) : 0;
 	q32_t travel[KIN_MAX_WHEELS] = {0};
 	if (k->p.kin == MOTION_KIN_OMNI) {
 		travel[0] = x - y - r;
@@ -105,7 +107,7 @@ void kin_step(kin_t *k, const fx_twist_t *body, const int32_t meas[], int32_t ou
 		*following_err_counts = worst;
 }
 
-void odom_integrate(fx_pose_t *pose, const fx_twist_t *d)
+void odom_integrate(fx_pose_t *pose, const fx_twist_t *d, fx_trig_cache_t *tc)
 {
 	if (d->vx_pt == 0 && d->vy_pt == 0) {
 		if (d->w_pt != 0)
@@ -114,7 +116,10 @@ void odom_integrate(fx_pose_t *pose, const fx_twist_t *d)
 	}
 	uint32_t mid = fx_deg_to_bam(pose->th_deg + d->w_pt / 2);
 	int32_t c, s;
-	fx_sincos_bam(mid, &s, &c);
+	if (tc)
+		fx_sincos_cached(tc, mid, &s, &c);
+	else
+		fx_sincos_bam(mid, &s, &c);
 	pose->x_mm += fx_mul_q30(d->vx_pt, c) - fx_mul_q30(d->vy_pt, s);
 	pose->y_mm += fx_mul_q30(d->vx_pt, s) + fx_mul_q30(d->vy_pt, c);
 	pose->th_deg = fx_wrap_deg(pose->th_deg + d->w_pt);

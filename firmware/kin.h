@@ -23,15 +23,15 @@
 #define KIN_MAX_WHEELS 4
 
 typedef struct {
-	uint8_t kin;       /* motion_kin_t */
-	uint8_t n;         /* wheels */
+	uint8_t kin; /* motion_kin_t */
+	uint8_t n;   /* wheels */
 	uint32_t tick_hz;
-	q32_t counts_per_mm;   /* Q32 */
+	q32_t counts_per_mm; /* Q32 */
 	/* Wheel travel (mm) per degree of body rotation, Q32: (T/2)*pi/180 on a
 	 * differential base, ((L+T)/2)*pi/180 on mecanum. */
 	q32_t mm_per_deg;
-	q32_t deg_per_mm;      /* inverse of mm_per_deg, Q32 */
-	int64_t kp_q16;        /* position loop gain, 1/s, Q16 */
+	q32_t deg_per_mm; /* inverse of mm_per_deg, Q32 */
+	int64_t kp_q16;	  /* position loop gain, 1/s, Q16 */
 } kin_params_t;
 
 typedef struct {
@@ -41,7 +41,7 @@ typedef struct {
 	int64_t ref_counts_q32[KIN_MAX_WHEELS];
 	int32_t last_meas[KIN_MAX_WHEELS];
 	int64_t mm_per_count_q48; /* derived: odometry needs more than Q32 over kilometres */
-	q32_t counts_per_deg;     /* derived: wheel counts per degree of body rotation */
+	q32_t counts_per_deg;	  /* derived: wheel counts per degree of body rotation */
 	bool synced;
 } kin_t;
 
@@ -60,10 +60,11 @@ void kin_sync(kin_t *k, const int32_t meas_counts[]);
  * read the measured counts, return drive setpoints (counts/s, Q8) and the
  * measured body displacement since the previous call (for odometry).
  * following_err_counts (optional) receives the largest |ref - meas|. */
-void kin_step(kin_t *k, const fx_twist_t *body, const int32_t meas_counts[],
-	      int32_t out_cps_q8[], fx_twist_t *measured_delta, int64_t *following_err_counts);
+void kin_step(kin_t *k, const fx_twist_t *body, const int32_t meas_counts[], int32_t out_cps_q8[],
+	      fx_twist_t *measured_delta, int64_t *following_err_counts);
 
-/* Integrate a body-frame displacement into a world pose (midpoint heading). */
-void odom_integrate(fx_pose_t *pose, const fx_twist_t *delta_body);
+/* Integrate a body-frame displacement into a world pose (midpoint heading).
+ * tc (optional) keeps the last heading's sine and cosine between calls. */
+void odom_integrate(fx_pose_t *pose, const fx_twist_t *delta_body, fx_trig_cache_t *tc);
 
 #endif

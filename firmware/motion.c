@@ -2,10 +2,12 @@
  * Profile and corner maths are in traj.c; see traj.h for the derivation. */
 #include "motion.h"
 
+#include <stddef.h>
+
 #include "kin.h"
 
-#define TINY_MM ((q32_t)4295)  /* 1e-6 mm: below this a line has no length */
-#define TINY_DEG ((q32_t)4295) /* 1e-6 deg */
+#define TINY_MM	       ((q32_t)4295)	 /* 1e-6 mm: below this a line has no length */
+#define TINY_DEG       ((q32_t)4295)	 /* 1e-6 deg */
 #define DEG_TO_RAD_Q32 ((q32_t)74961321) /* pi / 180 */
 
 static motion_cmd_t *q_at(motion_t *m, uint8_t i)
@@ -60,7 +62,10 @@ void motion_set_jog_timeout_ms(motion_t *m, uint32_t ms)
 	m->jog_timeout_ticks = (uint32_t)(((uint64_t)ms * m->p.tick_hz + 999) / 1000);
 }
 
-void motion_set_caution(motion_t *m, q32_t vt_cap) { m->cap_t_pt = vt_cap / m->p.tick_hz; }
+void motion_set_caution(motion_t *m, q32_t vt_cap)
+{
+	m->cap_t_pt = vt_cap / m->p.tick_hz;
+}
 
 /* Rigid transform taking the reference pose onto a redefined pose: every
  * point the engine holds is mapped through it, so the active piece and the
@@ -132,7 +137,10 @@ static q32_t vt_eff(const motion_t *m)
 
 /* ---- queue ---------------------------------------------------------- */
 
-static bool queue_full(const motion_t *m) { return m->q_count >= MOTION_QUEUE_LEN; }
+static bool queue_full(const motion_t *m)
+{
+	return m->q_count >= MOTION_QUEUE_LEN;
+}
 
 /* Position where the last queued command ends, if known. */
 static bool tail_end(motion_t *m, q32_t *x, q32_t *y)
@@ -262,7 +270,10 @@ static q32_t corner_cap(const motion_t *m, const motion_cmd_t *c)
 	return v;
 }
 
-static q32_t seg_dist(q32_t x0, q32_t y0, q32_t x1, q32_t y1) { return fx_hypot(x1 - x0, y1 - y0); }
+static q32_t seg_dist(q32_t x0, q32_t y0, q32_t x1, q32_t y1)
+{
+	return fx_hypot(x1 - x0, y1 - y0);
+}
 
 /* Length of cruise command i's straight part: from the previous corner's
  * exit (or its start) to its own corner's entry (or its waypoint). */
@@ -300,7 +311,8 @@ static void backward_pass(motion_t *m)
 		}
 		q32_t v = corner_cap(m, c);
 		if ((uint8_t)(i + 1) < m->q_count) {
-			q32_t reach = traj_reach(q_at(m, (uint8_t)(i + 1))->line_mm, next_v, m->a_t_pt2);
+			q32_t reach =
+			    traj_reach(q_at(m, (uint8_t)(i + 1))->line_mm, next_v, m->a_t_pt2);
 			if (reach < v)
 				v = reach;
 		}
@@ -461,7 +473,10 @@ void motion_pause(motion_t *m)
 		m->vtarget = (fx_twist_t){0};
 }
 
-void motion_resume(motion_t *m) { m->paused = false; }
+void motion_resume(motion_t *m)
+{
+	m->paused = false;
+}
 
 void motion_stop(motion_t *m)
 {
@@ -499,8 +514,9 @@ static void seg_line(motion_t *m, const fx_pose_t *from, q32_t tx, q32_t ty, q32
 	g->p_end.x_mm = tx;
 	g->p_end.y_mm = ty;
 	/* Travel sign relative to the heading (moveForward may go backward). */
-	uint32_t hb = fx_deg_to_bam(from->th_deg);
-	int64_t dot = (int64_t)g->ux * fx_cos_bam(hb) + (int64_t)g->uy * fx_sin_bam(hb);
+	int32_t hs, hc;
+	fx_sincos_bam(fx_deg_to_bam(from->th_deg), &hs, &hc);
+	int64_t dot = (int64_t)g->ux * hc + (int64_t)g->uy * hs;
 	g->dir = dot < 0 ? -1 : 1;
 	g->dth = fx_wrap_deg(th_end - from->th_deg);
 	g->p_end.th_deg = fx_wrap_deg(from->th_deg + g->dth);
@@ -678,9 +694,10 @@ static bool next_piece(motion_t *m)
 				g->len = 2 * c->corner.lh_mm;
 				/* Exit: the waypoint plus the tangent length along the new line. */
 				q32_t th_out = fx_wrap_deg(r->th_deg + c->corner.phi_deg);
-				uint32_t b = fx_deg_to_bam(th_out);
-				g->p_end.x_mm = c->target.x_mm + fx_mul_q30(c->corner.t_mm, fx_cos_bam(b));
-				g->p_end.y_mm = c->target.y_mm + fx_mul_q30(c->corner.t_mm, fx_sin_bam(b));
+				int32_t so, co;
+				fx_sincos_bam(fx_deg_to_bam(th_out), &so, &co);
+				g->p_end.x_mm = c->target.x_mm + fx_mul_q30(c->corner.t_mm, co);
+				g->p_end.y_mm = c->target.y_mm + fx_mul_q30(c->corner.t_mm, so);
 				g->p_end.th_deg = th_out;
 				return true;
 			}
@@ -751,11 +768,13 @@ static q32_t piece_horizon(motion_t *m, q32_t a)
 	return rem;
 }
 
-/* Reference pose at progress s along the active piece. */
-static void piece_pose(motion_t *m, q32_t s_old, q32_t s, fx_pose_t *out)
+/* Moves the reference pose, in place, from the progress g->s to s along
+ * the active piece (the caller then sets g->s). */
+static void piece_advance(motion_t *m, q32_t s)
 {
 	seg_t *g = &m->seg;
-	*out = m->ref;
+	q32_t s_old = g->s;
+	fx_pose_t *out = &m->ref;
 	switch (g->kind) {
 	case SEG_LINE:
 		out->x_mm = g->p0.x_mm + fx_mul_q30(s, g->ux);
@@ -773,7 +792,7 @@ static void piece_pose(motion_t *m, q32_t s_old, q32_t s, fx_pose_t *out)
 	case SEG_ARC: {
 		uint32_t b = fx_deg_to_bam(g->dir * s);
 		int32_t co, si;
-	fx_sincos_bam(b, &si, &co);
+		fx_sincos_bam(b, &si, &co);
 		q32_t rx = g->p0.x_mm - g->cx, ry = g->p0.y_mm - g->cy;
 		out->x_mm = g->cx + fx_mul_q30(rx, co) - fx_mul_q30(ry, si);
 		out->y_mm = g->cy + fx_mul_q30(rx, si) + fx_mul_q30(ry, co);
@@ -782,14 +801,29 @@ static void piece_pose(motion_t *m, q32_t s_old, q32_t s, fx_pose_t *out)
 	}
 	case SEG_CORNER: {
 		/* Heading is exact along the clothoids; position integrates the
-		 * step at the midpoint heading. */
+		 * step at the midpoint heading. Within one clothoid the heading is
+		 * quadratic in s (h'' = +-phi / Lh^2), so the midpoint's is the
+		 * mean of the ends minus h'' ds^2 / 8: one evaluation a step. The
+		 * step starts at the progress g->s, whose heading is g->h. */
 		q32_t ds = s - s_old;
-		q32_t th_mid = g->p0.th_deg + traj_corner_heading(&g->corner, s_old + ds / 2);
+		q32_t lh = g->corner.lh_mm;
+		q32_t h1 = traj_corner_heading(&g->corner, s);
+		q32_t hm;
+		if (s <= lh || s_old >= lh) {
+			/* ds / Lh, Q30 (ds <= 2 Lh: the product fits) */
+			int64_t du = fx_mul_fit(ds, g->corner.inv_lh);
+			int32_t du2 = (int32_t)((du * du) >> 30);
+			q32_t corr = fx_mul_q30(g->corner.phi_deg, du2) / 8;
+			hm = (g->h + h1) / 2 + (s <= lh ? -corr : corr);
+		} else {
+			hm = traj_corner_heading(&g->corner, s_old + ds / 2);
+		}
+		g->h = h1;
 		int32_t sn, cs;
-		fx_sincos_bam(fx_deg_to_bam(th_mid), &sn, &cs);
-		out->x_mm = m->ref.x_mm + fx_mul_q30(ds, cs);
-		out->y_mm = m->ref.y_mm + fx_mul_q30(ds, sn);
-		out->th_deg = fx_wrap_deg(g->p0.th_deg + traj_corner_heading(&g->corner, s));
+		fx_sincos_bam(fx_deg_to_bam(g->p0.th_deg + hm), &sn, &cs);
+		out->x_mm += fx_mul_q30(ds, cs);
+		out->y_mm += fx_mul_q30(ds, sn);
+		out->th_deg = fx_wrap_deg(g->p0.th_deg + h1);
 		break;
 	}
 	default:
@@ -859,18 +893,19 @@ static void path_tick(motion_t *m, fx_twist_t *out)
 				if (m->seg.kind == SEG_TURN)
 					amax = m->amax_r_pt2;
 				else if (m->seg.kind == SEG_ARC)
-					amax = fx_min64(m->amax_r_pt2, fx_div(m->amax_t_pt2, m->seg.arc_k));
+					amax = fx_min64(m->amax_r_pt2,
+							fx_div(m->amax_t_pt2, m->seg.arc_k));
 				else if (m->seg.kind == SEG_LINE && m->seg.dth != 0)
-					/* Heading turns with the path: both limits bind. */
+				/* Heading turns with the path: both limits bind. */
 				{
 					q32_t ar = fx_mul(m->amax_r_pt2, m->seg.omni_k);
 					amax = fx_min64(amax, ar - (ar >> 12));
-				}
-				else if (m->seg.kind == SEG_CORNER)
+				} else if (m->seg.kind == SEG_CORNER)
 					/* Half the rotational limit for braking, the other
 					 * half is the curvature change (traj.h). */
-					amax = fx_min64(amax,
-							fx_mul(m->amax_r_pt2, m->seg.corner.k_mm_deg) / 2);
+					amax = fx_min64(
+					    amax,
+					    fx_mul(m->amax_r_pt2, m->seg.corner.k_mm_deg) / 2);
 				u = fx_min64(u, fx_max64(m->v - amax, 0));
 			}
 			budget = u;
@@ -878,10 +913,8 @@ static void path_tick(motion_t *m, fx_twist_t *out)
 		}
 		q32_t rem = m->seg.len - m->seg.s;
 		if (budget < rem) {
-			fx_pose_t next;
-			piece_pose(m, m->seg.s, m->seg.s + budget, &next);
+			piece_advance(m, m->seg.s + budget);
 			m->seg.s += budget;
-			m->ref = next;
 			if (m->seg.kind == SEG_LINE && m->p.kin == MOTION_KIN_DIFF &&
 			    m->seg.s != budget) {
 				*out = (fx_twist_t){.vx_pt = m->seg.dir * budget};
@@ -892,8 +925,9 @@ static void path_tick(motion_t *m, fx_twist_t *out)
 				/* Path length at the heading change of the step; the
 				 * odometry integrates it at the midpoint heading, as the
 				 * corner's own integration does. */
-				*out = (fx_twist_t){.vx_pt = budget,
-						    .w_pt = fx_wrap_deg(m->ref.th_deg - start.th_deg)};
+				*out =
+				    (fx_twist_t){.vx_pt = budget,
+						 .w_pt = fx_wrap_deg(m->ref.th_deg - start.th_deg)};
 				return;
 			}
 			if (m->seg.kind == SEG_TURN && m->seg.s != budget) {
@@ -914,10 +948,8 @@ static void path_tick(motion_t *m, fx_twist_t *out)
 		 * its integration arrives (within a micrometre of the planned exit),
 		 * so no position step appears; the next line aims from there. */
 		if (m->seg.kind == SEG_CORNER) {
-			fx_pose_t end;
-			piece_pose(m, m->seg.s, m->seg.len, &end);
-			end.th_deg = m->seg.p_end.th_deg;
-			m->ref = end;
+			piece_advance(m, m->seg.len);
+			m->ref.th_deg = m->seg.p_end.th_deg;
 		} else {
 			m->ref = m->seg.p_end;
 		}
@@ -967,7 +999,10 @@ static void slew2(q32_t *x, q32_t *y, q32_t tx, q32_t ty, q32_t step)
 	*y += fx_mul_q30(step, (int32_t)(fx_div(dy, len) >> 2));
 }
 
-static bool twist_zero(const fx_twist_t *t) { return t->vx_pt == 0 && t->vy_pt == 0 && t->w_pt == 0; }
+static bool twist_zero(const fx_twist_t *t)
+{
+	return t->vx_pt == 0 && t->vy_pt == 0 && t->w_pt == 0;
+}
 
 /* Jog and joystick: slew toward the target velocity. */
 static void velocity_tick(motion_t *m, fx_twist_t *out)
@@ -1049,7 +1084,7 @@ static void continuous_tick(motion_t *m, fx_twist_t *out)
 	if (!m->goal_position_done && m->vel.vx_pt > dist && m->p.kin == MOTION_KIN_DIFF)
 		m->vel.vx_pt = fx_max64(dist, prev_vx - at);
 	*out = m->vel;
-	odom_integrate(&m->ref, out);
+	odom_integrate(&m->ref, out, NULL);
 	if (m->goal_position_done) {
 		q32_t e = fx_wrap_deg(m->goal.th_deg - m->ref.th_deg);
 		if (fx_abs64(e) <= fx_abs64(m->vel.w_pt) && fx_abs64(m->vel.w_pt) <= ar) {
@@ -1085,7 +1120,7 @@ void motion_tick(motion_t *m, const fx_pose_t *measured, fx_twist_t *out)
 	case MODE_JOG:
 	case MODE_JOYSTICK:
 		velocity_tick(m, out);
-		odom_integrate(&m->ref, out);
+		odom_integrate(&m->ref, out, NULL);
 		break;
 	case MODE_CONTINUOUS:
 		continuous_tick(m, out);
@@ -1105,7 +1140,10 @@ void motion_tick(motion_t *m, const fx_pose_t *measured, fx_twist_t *out)
 		m->mode = MODE_JOYSTICK;
 }
 
-bool motion_is_moving(const motion_t *m) { return !twist_zero(&m->vel) || m->v != 0; }
+bool motion_is_moving(const motion_t *m)
+{
+	return !twist_zero(&m->vel) || m->v != 0;
+}
 
 bool motion_has_work(const motion_t *m)
 {
@@ -1113,6 +1151,15 @@ bool motion_has_work(const motion_t *m)
 	return (m->mode != MODE_IDLE && m->mode != MODE_JOYSTICK) || motion_is_moving(m);
 }
 
-bool motion_is_paused(const motion_t *m) { return m->paused; }
-uint8_t motion_queue_len(const motion_t *m) { return m->q_count; }
-uint8_t motion_mode(const motion_t *m) { return m->mode; }
+bool motion_is_paused(const motion_t *m)
+{
+	return m->paused;
+}
+uint8_t motion_queue_len(const motion_t *m)
+{
+	return m->q_count;
+}
+uint8_t motion_mode(const motion_t *m)
+{
+	return m->mode;
+}

@@ -57,43 +57,44 @@ typedef enum {
 } motion_cmd_kind_t;
 
 typedef struct {
-	uint8_t kind;        /* motion_cmd_kind_t */
-	uint8_t stage;       /* execution progress within the command */
-	bool has_heading;    /* LINE: target.th is to be reached */
-	bool start_known;    /* CRUISE: sx, sy hold where its line starts */
-	bool has_corner;     /* CRUISE: blended into the next waypoint */
-	fx_pose_t target;    /* world frame end pose (position for every kind) */
-	q32_t cx_mm, cy_mm;  /* ARC centre, world frame */
-	q32_t angle_deg;     /* TURN / ARC sweep, signed, unwrapped */
-	q32_t sx_mm, sy_mm;  /* CRUISE: start of the incoming line; ARC: centre, body frame */
-	q32_t vend_pt;       /* CRUISE: planned speed through the corner */
-	q32_t line_mm;       /* CRUISE: length of its straight part (cached) */
+	uint8_t kind;	    /* motion_cmd_kind_t */
+	uint8_t stage;	    /* execution progress within the command */
+	bool has_heading;   /* LINE: target.th is to be reached */
+	bool start_known;   /* CRUISE: sx, sy hold where its line starts */
+	bool has_corner;    /* CRUISE: blended into the next waypoint */
+	fx_pose_t target;   /* world frame end pose (position for every kind) */
+	q32_t cx_mm, cy_mm; /* ARC centre, world frame */
+	q32_t angle_deg;    /* TURN / ARC sweep, signed, unwrapped */
+	q32_t sx_mm, sy_mm; /* CRUISE: start of the incoming line; ARC: centre, body frame */
+	q32_t vend_pt;	    /* CRUISE: planned speed through the corner */
+	q32_t line_mm;	    /* CRUISE: length of its straight part (cached) */
 	traj_corner_t corner;
 } motion_cmd_t;
 
 typedef enum {
 	MODE_IDLE = 0,
-	MODE_PATH,       /* executing queued path commands */
-	MODE_JOG,        /* velocity command with watchdog */
+	MODE_PATH,	 /* executing queued path commands */
+	MODE_JOG,	 /* velocity command with watchdog */
 	MODE_CONTINUOUS, /* retargetable goal */
-	MODE_JOYSTICK,   /* velocity target from the joystick */
+	MODE_JOYSTICK,	 /* velocity target from the joystick */
 } motion_mode_t;
 
 typedef enum { SEG_NONE = 0, SEG_LINE, SEG_TURN, SEG_ARC, SEG_CORNER } seg_kind_t;
 
 /* The piece of path being executed. */
 typedef struct {
-	uint8_t kind;      /* seg_kind_t */
-	int8_t dir;        /* TURN/ARC: sweep sign */
-	q32_t len, s;      /* length and progress (mm, or deg for TURN/ARC) */
-	fx_pose_t p0;      /* start pose */
-	fx_pose_t p_end;   /* exact end pose, taken at completion */
-	int32_t ux, uy;    /* LINE/CORNER entry: unit direction, Q30 */
-	q32_t dth;         /* LINE: heading change along it (omni) */
-	q32_t cx, cy;      /* ARC centre */
-	q32_t arc_k;       /* ARC: mm of travel per degree of sweep */
+	uint8_t kind;	      /* seg_kind_t */
+	int8_t dir;	      /* TURN/ARC: sweep sign */
+	q32_t len, s;	      /* length and progress (mm, or deg for TURN/ARC) */
+	fx_pose_t p0;	      /* start pose */
+	fx_pose_t p_end;      /* exact end pose, taken at completion */
+	int32_t ux, uy;	      /* LINE/CORNER entry: unit direction, Q30 */
+	q32_t dth;	      /* LINE: heading change along it (omni) */
+	q32_t cx, cy;	      /* ARC centre */
+	q32_t arc_k;	      /* ARC: mm of travel per degree of sweep */
 	q32_t arc_kx, arc_ky; /* ARC: body velocity per unit rotation rate (mm/deg) */
-	q32_t omni_k;      /* LINE (omni): mm per degree of heading change */
+	q32_t omni_k;	      /* LINE (omni): mm per degree of heading change */
+	q32_t h;	      /* CORNER: heading change at s */
 	traj_corner_t corner;
 } seg_t;
 
@@ -105,18 +106,18 @@ typedef struct {
 	q32_t cap_t_pt; /* caution cap, 0 = none */
 	uint32_t jog_timeout_ticks;
 
-	fx_pose_t ref;     /* reference (commanded) pose */
-	fx_twist_t vel;    /* current commanded body velocity */
-	uint8_t mode;      /* motion_mode_t */
-	bool paused;       /* held by pause (decelerating or stopped) */
-	bool stopping;     /* stop(): decelerating, then discard */
-	bool joystick;     /* joystick enabled */
+	fx_pose_t ref;	/* reference (commanded) pose */
+	fx_twist_t vel; /* current commanded body velocity */
+	uint8_t mode;	/* motion_mode_t */
+	bool paused;	/* held by pause (decelerating or stopped) */
+	bool stopping;	/* stop(): decelerating, then discard */
+	bool joystick;	/* joystick enabled */
 
 	motion_cmd_t q[MOTION_QUEUE_LEN];
 	uint8_t q_head, q_count;
 
-	seg_t seg;         /* active piece (mode PATH) */
-	q32_t v;           /* speed along the active piece, per tick */
+	seg_t seg; /* active piece (mode PATH) */
+	q32_t v;   /* speed along the active piece, per tick */
 
 	/* Jog / joystick velocity target (body frame, per tick). */
 	fx_twist_t vtarget;
@@ -172,11 +173,14 @@ void motion_halt(motion_t *m);
 void motion_tick(motion_t *m, const fx_pose_t *measured, fx_twist_t *out);
 
 /* Queries. */
-bool motion_is_moving(const motion_t *m);   /* velocity not zero */
-bool motion_has_work(const motion_t *m);    /* moving, or anything pending */
+bool motion_is_moving(const motion_t *m); /* velocity not zero */
+bool motion_has_work(const motion_t *m);  /* moving, or anything pending */
 bool motion_is_paused(const motion_t *m);
 uint8_t motion_queue_len(const motion_t *m);
 uint8_t motion_mode(const motion_t *m);
-static inline const fx_pose_t *motion_ref_pose(const motion_t *m) { return &m->ref; }
+static inline const fx_pose_t *motion_ref_pose(const motion_t *m)
+{
+	return &m->ref;
+}
 
 #endif

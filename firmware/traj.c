@@ -2,7 +2,10 @@
 #include "traj.h"
 
 /* T(n) = a n (n + 1) / 2 */
-static q32_t tri(int64_t n, q32_t a) { return (n * (n + 1) / 2) * a; }
+static q32_t tri(int64_t n, q32_t a)
+{
+	return (n * (n + 1) / 2) * a;
+}
 
 q32_t traj_brake_dist(q32_t u, q32_t a)
 {
@@ -12,7 +15,10 @@ q32_t traj_brake_dist(q32_t u, q32_t a)
 	return n * u - tri(n, a);
 }
 
-static q32_t g_of(q32_t u, q32_t a) { return u + traj_brake_dist(u, a); }
+static q32_t g_of(q32_t u, q32_t a)
+{
+	return u + traj_brake_dist(u, a);
+}
 
 q32_t traj_umax(q32_t d, q32_t a)
 {
@@ -59,18 +65,24 @@ q32_t fx_div(q32_t a, q32_t b)
 	if (b == 0)
 		return a >= 0 ? INT64_MAX : INT64_MIN;
 	bool neg = (a < 0) != (b < 0);
-	uint64_t ua = (uint64_t)fx_abs64(a), ub = (uint64_t)fx_abs64(b);
+	/* Magnitudes in unsigned arithmetic: |INT64_MIN| is 2^63, not UB. */
+	uint64_t ua = a < 0 ? 0u - (uint64_t)a : (uint64_t)a;
+	uint64_t ub = b < 0 ? 0u - (uint64_t)b : (uint64_t)b;
 	uint64_t q = ua / ub, r = ua % ub;
 	if (q >> 31)
 		return neg ? INT64_MIN : INT64_MAX;
+	/* The 32 fraction bits by long division, as many bits per step as the
+	 * remainder can be shifted without overflow (r < ub, so clz(ub) bits):
+	 * one hardware division for a divisor below 2^32, two or three for the
+	 * lengths of a floor. The bits are those of the bitwise long division. */
 	uint64_t res = q << 32;
-	/* Long division for the 32 fraction bits. */
-	for (int i = 31; i >= 0; i--) {
-		r <<= 1;
-		if (r >= ub) {
-			r -= ub;
-			res |= (uint64_t)1 << i;
-		}
+	int k = ub >> 63 ? 1 : __builtin_clzll(ub); /* ub = 2^63: r < 2^63 */
+	for (int left = 32; left > 0 && r != 0;) {
+		int n = k < left ? k : left;
+		r <<= n;
+		left -= n;
+		res |= (r / ub) << left;
+		r %= ub;
 	}
 	return neg ? -(int64_t)res : (int64_t)res;
 }
@@ -118,22 +130,4 @@ bool traj_corner_plan(traj_corner_t *c, q32_t phi_deg, q32_t t_avail_mm, q32_t a
 	c->vacc_pt = fx_mul(c->lh_mm, rt);
 	c->acc_pt2 = fx_mul(ar_pt2, c->k_mm_deg) / 2;
 	return true;
-}
-
-q32_t traj_corner_heading(const traj_corner_t *c, q32_t s)
-{
-	q32_t psi = c->phi_deg / 2;
-	q32_t lh = c->lh_mm;
-	if (s <= 0)
-		return 0;
-	if (s >= 2 * lh)
-		return c->phi_deg;
-	/* u = s / Lh (Q30) by the reciprocal: no division on the tick path. */
-	bool second = s > lh;
-	int64_t u = fx_mul(second ? 2 * lh - s : s, c->inv_lh);
-	if (u > FX_Q30_ONE)
-		u = FX_Q30_ONE;
-	int32_t u2 = (int32_t)((u * u) >> 30);
-	q32_t th = fx_mul_q30(psi, u2);
-	return second ? c->phi_deg - th : th;
 }

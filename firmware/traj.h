@@ -71,20 +71,37 @@ q32_t fx_div(q32_t a, q32_t b);
 /* Geometry of a blended corner with tangent length t_mm and deflection
  * phi_deg (signed, |phi| < 180). */
 typedef struct {
-	q32_t phi_deg;   /* signed deflection */
-	q32_t lh_mm;     /* half length */
-	q32_t t_mm;      /* tangent length: waypoint to corner start and end */
-	q32_t k_mm_deg;  /* Lh / |phi|: speed cap per unit rotation rate */
-	q32_t vacc_pt;   /* Lh sqrt(ar / (2 |phi|)): speed cap from rotational acceleration */
-	q32_t acc_pt2;   /* ar Lh / (2 |phi|): path acceleration cap in the corner */
-	q32_t inv_lh;    /* 2^62 / Lh (raw): s * inv_lh >> 32 is s / Lh in Q30 */
+	q32_t phi_deg;	/* signed deflection */
+	q32_t lh_mm;	/* half length */
+	q32_t t_mm;	/* tangent length: waypoint to corner start and end */
+	q32_t k_mm_deg; /* Lh / |phi|: speed cap per unit rotation rate */
+	q32_t vacc_pt;	/* Lh sqrt(ar / (2 |phi|)): speed cap from rotational acceleration */
+	q32_t acc_pt2;	/* ar Lh / (2 |phi|): path acceleration cap in the corner */
+	q32_t inv_lh;	/* 2^62 / Lh (raw): s * inv_lh >> 32 is s / Lh in Q30 */
 } traj_corner_t;
 
 /* Plans a corner: returns false when no blend is possible (deflection too
  * close to a reversal, or no room). ar_pt2 is the rotational acceleration
  * in force (deg/tick^2, Q32). */
 bool traj_corner_plan(traj_corner_t *c, q32_t phi_deg, q32_t t_avail_mm, q32_t ar_pt2);
-/* Heading change from the corner start at path length s (0..2 Lh). */
-q32_t traj_corner_heading(const traj_corner_t *c, q32_t s);
+/* Heading change from the corner start at path length s (0..2 Lh); inline,
+ * as every corner tick evaluates it. */
+static inline q32_t traj_corner_heading(const traj_corner_t *c, q32_t s)
+{
+	q32_t psi = c->phi_deg / 2;
+	q32_t lh = c->lh_mm;
+	if (s <= 0)
+		return 0;
+	if (s >= 2 * lh)
+		return c->phi_deg;
+	/* u = s / Lh (Q30) by the reciprocal: no division on the tick path. */
+	bool second = s > lh;
+	int64_t u = fx_mul_fit(second ? 2 * lh - s : s, c->inv_lh); /* <= 2^31: fits */
+	if (u > FX_Q30_ONE)
+		u = FX_Q30_ONE;
+	int32_t u2 = (int32_t)((u * u) >> 30);
+	q32_t th = fx_mul_q30(psi, u2);
+	return second ? c->phi_deg - th : th;
+}
 
 #endif

@@ -470,6 +470,27 @@ static void check_overrun(vehicle_t *v, uint32_t now_us)
 	v->have_now = true;
 }
 
+static void encoder_stuck(vehicle_t *v, uint8_t i)
+{
+	char s[VS_ALARM_SOURCE_MAX];
+	v->encoder_still_ticks[i] = 0;
+	axis_text(s, sizeof s, "encoder ", i, " stuck");
+	raise_fault(v, ALM_F_ENCODER_STUCK, s);
+}
+
+/* Encoder supervision, in the same pass as the drive sample: a wheel
+ * commanded above the stuck threshold whose count did not change. */
+static inline void supervise_encoder(vehicle_t *v, uint8_t i, bool moved)
+{
+	int32_t cps = v->wheel_cps_q8[i];
+	bool commanded =
+	    v->servo && (cps >= v->encoder_stuck_cps_q8 || cps <= -v->encoder_stuck_cps_q8);
+	if (!commanded || moved)
+		v->encoder_still_ticks[i] = 0;
+	else if (++v->encoder_still_ticks[i] >= v->encoder_stuck_ticks)
+		encoder_stuck(v, i);
+}
+
 static void sample_drives(vehicle_t *v)
 {
 	char s[VS_ALARM_SOURCE_MAX];
@@ -488,11 +509,13 @@ static void sample_drives(vehicle_t *v)
 				axis_text(s, sizeof s, "drive ", i, " not answering");
 				raise_fault(v, ALM_F_DRIVE_TIMEOUT, s);
 			}
+			supervise_encoder(v, i, false);
 			continue;
 		}
 		v->drive_silent_ticks[i] = 0;
 		v->drive_timeout_reported[i] = false;
 		v->drive[i] = st;
+		supervise_encoder(v, i, st.position_counts != v->meas_counts[i]);
 		v->meas_counts[i] = st.position_counts;
 		uint16_t fc = v->powered ? st.fault_code : 0;
 		if (fc != 0 && fc != v->drive_fault_reported[i]) {
@@ -503,25 +526,6 @@ static void sample_drives(vehicle_t *v)
 			raise_fault(v, ALM_F_DRIVE, s);
 		}
 		v->drive_fault_reported[i] = fc;
-	}
-}
-
-static void supervise_encoders(vehicle_t *v, const int32_t prev[])
-{
-	char s[VS_ALARM_SOURCE_MAX];
-	for (uint8_t i = 0; i < v->naxes; i++) {
-		int32_t cps = v->wheel_cps_q8[i];
-		bool commanded =
-		    v->servo && (cps >= v->encoder_stuck_cps_q8 || cps <= -v->encoder_stuck_cps_q8);
-		if (!commanded || v->meas_counts[i] != prev[i]) {
-			v->encoder_still_ticks[i] = 0;
-			continue;
-		}
-		if (++v->encoder_still_ticks[i] >= v->encoder_stuck_ticks) {
-			v->encoder_still_ticks[i] = 0;
-			axis_text(s, sizeof s, "encoder ", i, " stuck");
-			raise_fault(v, ALM_F_ENCODER_STUCK, s);
-		}
 	}
 }
 
@@ -633,14 +637,9 @@ static void feed_joystick(vehicle_t *v)
 
 void vehicle_tick(vehicle_t *v, uint32_t now_us)
 {
-	int32_t prev[VS_MAX_AXES];
-	for (unsigned i = 0; i < VS_MAX_AXES; i++)
-		prev[i] = v->meas_counts[i];
-
 	check_overrun(v, now_us);
 	sample_drives(v);
 	supervise_inputs(v);
-	supervise_encoders(v, prev);
 	feed_joystick(v);
 
 	fx_twist_t cmd = {0, 0, 0};
@@ -656,7 +655,7 @@ void vehicle_tick(vehicle_t *v, uint32_t now_us)
 	int64_t ferr = 0;
 	int32_t out[VS_MAX_AXES] = {0};
 	kin_step(&v->kin, &cmd, v->meas_counts, out, &delta, &ferr);
-	odom_integrate(&v->odom, &delta);
+	odom_integrate(&v->odom, &delta, &v->odom_trig);
 
 	if (v->servo && ferr > v->following_err_max_counts) {
 		char s[VS_ALARM_SOURCE_MAX];

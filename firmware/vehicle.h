@@ -22,8 +22,8 @@
 #include "motion.h"
 #include "../hal/hal.h"
 
-#define VS_IF_VERSION "RTC VehicleService interface: ver.2.0.0"
-#define VS_FW_VERSION "Ver.1.0.0"
+#define VS_IF_VERSION	 "RTC VehicleService interface: ver.2.0.0"
+#define VS_FW_VERSION	 "Ver.1.0.0"
 #define VS_STATE_MSG_MAX 16
 
 /* getState codes (spec section 4). */
@@ -40,9 +40,15 @@ enum {
 	VS_STATE_UNPOWERED = 0x019,
 };
 
-typedef struct { double x, y; } vs_point_t;
-typedef struct { double x, y, theta; } vs_position_t;
-typedef struct { double translation, rotation; } vs_velocity_t;
+typedef struct {
+	double x, y;
+} vs_point_t;
+typedef struct {
+	double x, y, theta;
+} vs_position_t;
+typedef struct {
+	double translation, rotation;
+} vs_velocity_t;
 
 typedef struct vehicle vehicle_t;
 
@@ -94,14 +100,14 @@ bool vs_unlock(vehicle_t *v);
 /* Diagnostics for the bring-up console, traces and tests (not interface
  * operations). */
 typedef struct {
-	fx_pose_t ref_pose;              /* commanded */
-	fx_pose_t odom_pose;             /* measured (odometry) */
-	fx_twist_t cmd_twist_pt;         /* commanded body velocity per tick */
-	int32_t wheel_cps_q8[VS_MAX_AXES];   /* drive setpoints */
-	uint32_t ticks;                  /* control ticks since init */
-	uint32_t overruns;               /* ticks that arrived late */
+	fx_pose_t ref_pose;		   /* commanded */
+	fx_pose_t odom_pose;		   /* measured (odometry) */
+	fx_twist_t cmd_twist_pt;	   /* commanded body velocity per tick */
+	int32_t wheel_cps_q8[VS_MAX_AXES]; /* drive setpoints */
+	uint32_t ticks;			   /* control ticks since init */
+	uint32_t overruns;		   /* ticks that arrived late */
 	uint8_t queue_len;
-	uint8_t mode;                    /* motion_mode_t */
+	uint8_t mode; /* motion_mode_t */
 } vs_diag_t;
 void vehicle_diag(const vehicle_t *v, vs_diag_t *d);
 
@@ -110,7 +116,7 @@ void vehicle_diag(const vehicle_t *v, vs_diag_t *d);
 typedef enum {
 	VEHICLE_GATE_READY = 0, /* Ready-only operation */
 	VEHICLE_GATE_SERVO = 1, /* Servo-on operation, queued while paused */
-	VEHICLE_GATE_JOG = 2,   /* Servo-on velocity command: refused while paused */
+	VEHICLE_GATE_JOG = 2,	/* Servo-on velocity command: refused while paused */
 } vehicle_gate_t;
 /* Raises the warning "<op> refused: <reason of code>"; returns false. */
 bool vehicle_refuse(vehicle_t *v, const char *op, uint32_t code);
@@ -128,6 +134,7 @@ struct vehicle {
 	kin_t kin;
 	alarm_list_t alarms;
 	fx_pose_t odom;
+	fx_trig_cache_t odom_trig; /* odometry's last heading */
 	uint8_t naxes;
 	/* Settings in force (interface units, as accepted). */
 	vs_velocity_t vel_set, acc_set;
@@ -145,10 +152,10 @@ struct vehicle {
 	/* Supervision limits, fixed point, derived from cfg at init. */
 	uint32_t period_us;
 	uint32_t drive_timeout_ticks, encoder_stuck_ticks;
-	int32_t encoder_stuck_cps_q8;  /* commanded speed that must move the encoder */
+	int32_t encoder_stuck_cps_q8; /* commanded speed that must move the encoder */
 	int64_t following_err_max_counts;
 	uint32_t battery_low_mv, battery_critical_mv;
-	q32_t caution_vel_t;           /* mm/s, Q32 */
+	q32_t caution_vel_t; /* mm/s, Q32 */
 	int32_t joystick_deadband_q15;
 	/* Supervision. */
 	bool contact_prev, obstacle_prev, caution_prev, battery_low_armed;

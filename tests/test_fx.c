@@ -41,10 +41,10 @@ static void test_mul_rounding_and_saturation(void **state)
 {
 	(void)state;
 	/* 1.5 * 2^-32 * 0.5 = 0.75 raw -> 1; -0.75 raw -> -1; +-0.5 raw -> half up */
-	assert_int_equal(fx_mul(3, (q32_t)1 << 31), 2);     /* 1.5 -> 2 */
-	assert_int_equal(fx_mul(-3, (q32_t)1 << 31), -1);   /* -1.5 -> -1 */
-	assert_int_equal(fx_mul(1, (q32_t)1 << 31), 1);     /* 0.5 -> 1 */
-	assert_int_equal(fx_mul(-1, (q32_t)1 << 31), 0);    /* -0.5 -> 0 */
+	assert_int_equal(fx_mul(3, (q32_t)1 << 31), 2);	  /* 1.5 -> 2 */
+	assert_int_equal(fx_mul(-3, (q32_t)1 << 31), -1); /* -1.5 -> -1 */
+	assert_int_equal(fx_mul(1, (q32_t)1 << 31), 1);	  /* 0.5 -> 1 */
+	assert_int_equal(fx_mul(-1, (q32_t)1 << 31), 0);  /* -0.5 -> 0 */
 	assert_int_equal(fx_mul(FX_ONE * 3, FX_ONE * 7), FX_ONE * 21);
 	assert_int_equal(fx_mul(INT64_MAX, FX_ONE * 4), INT64_MAX);
 	assert_int_equal(fx_mul(INT64_MIN, FX_ONE * 4), INT64_MIN);
@@ -63,6 +63,108 @@ static void test_isqrt(void **state)
 		uint64_t r = fx_isqrt64(v);
 		assert_true(r * r <= v);
 		assert_true((r + 1) * (r + 1) > v || r == 4294967295u);
+	}
+}
+
+/* Bit-at-a-time forms of the division, square root and hypot, written
+ * straight from their definitions: the firmware's faster forms must return
+ * the same bits for every input. */
+static int64_t ref_div(int64_t a, int64_t b)
+{
+	if (b == 0)
+		return a >= 0 ? INT64_MAX : INT64_MIN;
+	int neg = (a < 0) != (b < 0);
+	uint64_t ua = a < 0 ? 0u - (uint64_t)a : (uint64_t)a;
+	uint64_t ub = b < 0 ? 0u - (uint64_t)b : (uint64_t)b;
+	uint64_t q = ua / ub, r = ua % ub;
+	if (q >> 31)
+		return neg ? INT64_MIN : INT64_MAX;
+	uint64_t res = q << 32;
+	for (int i = 31; i >= 0; i--) {
+		r <<= 1;
+		if (r >= ub) {
+			r -= ub;
+			res |= (uint64_t)1 << i;
+		}
+	}
+	return neg ? -(int64_t)res : (int64_t)res;
+}
+
+static uint64_t ref_isqrt(uint64_t v)
+{
+	uint64_t res = 0, bit = (uint64_t)1 << 62;
+	while (bit > v)
+		bit >>= 2;
+	while (bit) {
+		if (v >= res + bit) {
+			v -= res + bit;
+			res = (res >> 1) + bit;
+		} else {
+			res >>= 1;
+		}
+		bit >>= 2;
+	}
+	return res;
+}
+
+static int64_t ref_hypot(int64_t x, int64_t y)
+{
+	uint64_t ax = x < 0 ? 0u - (uint64_t)x : (uint64_t)x;
+	uint64_t ay = y < 0 ? 0u - (uint64_t)y : (uint64_t)y;
+	int shift = 0;
+	while ((ax | ay) >> 31) {
+		ax >>= 1;
+		ay >>= 1;
+		shift++;
+	}
+	while (ax < (1ull << 30) && ay < (1ull << 30) && (ax | ay) && shift > -16) {
+		ax <<= 1;
+		ay <<= 1;
+		shift--;
+	}
+	uint64_t r = ref_isqrt(ax * ax + ay * ay);
+	return shift >= 0 ? (int64_t)(r << shift) : (int64_t)(r >> -shift);
+}
+
+static int64_t any64(void)
+{
+	/* Every magnitude, both signs, and the edges. */
+	switch (next() % 8) {
+	case 0:
+		return INT64_MIN + (int64_t)(next() % 3);
+	case 1:
+		return INT64_MAX - (int64_t)(next() % 3);
+	case 2:
+		return (int64_t)(next() % 5) - 2;
+	default:
+		return (int64_t)(next() >> (next() % 64)) * ((next() & 1) ? -1 : 1);
+	}
+}
+
+static void test_fast_forms_match_bitwise(void **state)
+{
+	(void)state;
+	assert_int_equal(fx_div(1, INT64_MIN), ref_div(1, INT64_MIN));
+	assert_int_equal(fx_div(INT64_MAX, INT64_MIN), ref_div(INT64_MAX, INT64_MIN));
+	assert_int_equal(fx_div(-INT64_MAX, INT64_MAX), -FX_ONE);
+	for (int i = 0; i < 300000; i++) {
+		int64_t a = any64(), b = any64();
+		/* |INT64_MIN| is not an int64: both forms leave it out of range. */
+		if (a == INT64_MIN || b == INT64_MIN)
+			continue;
+		assert_int_equal(fx_div(a, b), ref_div(a, b));
+		assert_int_equal(fx_hypot(a >> 2, b >> 2), ref_hypot(a >> 2, b >> 2));
+		uint64_t v = (uint64_t)a ^ ((uint64_t)b << 1);
+		assert_int_equal(fx_isqrt64(v), ref_isqrt(v));
+	}
+	for (uint64_t v = 0; v < 70000; v++)
+		assert_int_equal(fx_isqrt64(v), ref_isqrt(v));
+	for (int k = 1; k < 64; k++) {
+		uint64_t p = (uint64_t)1 << k;
+		assert_int_equal(fx_isqrt64(p - 1), ref_isqrt(p - 1));
+		assert_int_equal(fx_isqrt64(p), ref_isqrt(p));
+		uint64_t r = ref_isqrt(p);
+		assert_int_equal(fx_isqrt64(r * r - 1), r - 1);
 	}
 }
 
@@ -108,7 +210,8 @@ static void test_angles(void **state)
 	assert_int_equal(fx_atan2_deg(FX_ONE, 0), fx_from_int(90));
 	assert_int_equal(fx_atan2_deg(-FX_ONE, 0), -fx_from_int(90));
 	for (int i = 0; i < 100000; i++) {
-		int64_t y = (int64_t)(next() >> 20) - (1ll << 43), x = (int64_t)(next() >> 20) - (1ll << 43);
+		int64_t y = (int64_t)(next() >> 20) - (1ll << 43),
+			x = (int64_t)(next() >> 20) - (1ll << 43);
 		double want = atan2((double)y, (double)x) * 180 / M_PI;
 		double got = (double)fx_atan2_deg(y, x) / Q;
 		double e = fabs(got - want);
@@ -127,7 +230,8 @@ static void test_profile_lands_exactly(void **state)
 	for (int i = 0; i < 2000; i++) {
 		q32_t d = (q32_t)(next() % (10000ull << 32)) + 1;
 		/* 1 mm/s^2 .. 2000 mm/s^2 and up to 2 m/s at 1 kHz */
-		q32_t a = (q32_t)(next() % 8590000) + 4295, vmax = (q32_t)(next() % (1ull << 33)) + a;
+		q32_t a = (q32_t)(next() % 8590000) + 4295,
+		      vmax = (q32_t)(next() % (1ull << 33)) + a;
 		q32_t s = 0, v = 0;
 		for (int k = 0; k < 10000000 && (s < d || v != 0); k++) {
 			q32_t u = traj_step(v, d - s, vmax, a);
@@ -145,12 +249,13 @@ static void test_profile_lands_exactly(void **state)
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
-		cmocka_unit_test(test_mul_paths_agree),
-		cmocka_unit_test(test_mul_rounding_and_saturation),
-		cmocka_unit_test(test_isqrt),
-		cmocka_unit_test(test_sin_cos_precision),
-		cmocka_unit_test(test_angles),
-		cmocka_unit_test(test_profile_lands_exactly),
+	    cmocka_unit_test(test_mul_paths_agree),
+	    cmocka_unit_test(test_mul_rounding_and_saturation),
+	    cmocka_unit_test(test_isqrt),
+	    cmocka_unit_test(test_fast_forms_match_bitwise),
+	    cmocka_unit_test(test_sin_cos_precision),
+	    cmocka_unit_test(test_angles),
+	    cmocka_unit_test(test_profile_lands_exactly),
 	};
 	return cmocka_run_group_tests_name("fixed point", tests, NULL, NULL);
 }

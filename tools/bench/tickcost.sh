@@ -19,12 +19,13 @@ for sc in "$@"; do
 		/^desc: Trigger: Client Request: / { label = $5 }
 		/^summary: / { print label, $2 }' {} + | sort -k1,1 -k2,2n >"$tmp/costs"
 	awk -v sc="$sc" '
-		{ n[$1]++; v[$1, n[$1]] = $2; s[$1] += $2 }
+		{ n[$1]++; v[$1, n[$1]] = $2; s[$1] += $2; if ($2 > 1000) over[$1]++ }
 		END {
 			for (l in n) {
 				med = v[l, int((n[l] + 1) / 2)]
-				printf "  %-9s %-15s %6d calls  mean %6.0f  median %6d  min %6d  max %6d\n",
-					sc, l, n[l], s[l] / n[l], med, v[l, 1], v[l, n[l]]
+				p99 = v[l, int((n[l] * 99 + 99) / 100)]
+				printf "  %-9s %-15s %6d calls  mean %6.0f  median %6d  min %6d  max %6d  p99 %6d  over1000 %5.1f%%\n",
+					sc, l, n[l], s[l] / n[l], med, v[l, 1], v[l, n[l]], p99, 100 * over[l] / n[l]
 			}
 		}' "$tmp/costs" | sort
 done
