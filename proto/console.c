@@ -8,10 +8,10 @@
 #include "console.h"
 
 #include <stdarg.h>
-#include <stdio.h>
 #include <string.h>
 
 #include "cmdtab.h"
+#include "fmt.h"
 #include "numparse.h"
 
 /* Tokens kept per line: an operation needs at most 1 + CMD_MAX_FIELDS; '$'
@@ -58,13 +58,13 @@ static void rb_puts(rbuf_t *r, const char *s)
 __attribute__((format(printf, 2, 0))) static void rb_vprintf(rbuf_t *r, const char *fmt, va_list ap)
 {
 	size_t room = rb_room(r);
-	int n;
+	size_t n;
 
 	if (!r->cap)
 		return;
-	n = vsnprintf(r->buf + r->len, room + 1, fmt, ap);
-	if (n > 0)
-		r->len += (size_t)n < room ? (size_t)n : room;
+	/* proto/fmt.c, not vsnprintf: the console's directives only (fmt.h). */
+	n = fmt_v(r->buf + r->len, room + 1, fmt, ap);
+	r->len += n < room ? n : room;
 	r->buf[r->len] = '\0';
 }
 

@@ -1,9 +1,9 @@
 /* Serial link multiplexer: console lines and binary frames on one port. */
 #include "link.h"
 
-#include <stdio.h>
 #include <string.h>
 
+#include "fmt.h"
 #include "numparse.h"
 
 static void link_out(link_t *l, const uint8_t *data, size_t n)
@@ -44,13 +44,14 @@ void link_format_stats(const link_t *l, char *buf, size_t cap)
 	const frame_rx_stats_t *r = &l->fs.rx.st;
 	const frame_srv_stats_t *s = &l->fs.st;
 
-	snprintf(buf, cap,
-		 "ok frames %lu executed %lu duplicates %lu naks %lu crc %lu oversize %lu "
-		 "truncated %lu other %lu txdrop %lu",
-		 (unsigned long)r->frames, (unsigned long)s->executed, (unsigned long)s->duplicates,
-		 (unsigned long)s->naks, (unsigned long)r->crc_errors, (unsigned long)r->oversize,
-		 (unsigned long)r->truncated, (unsigned long)r->other_bytes,
-		 (unsigned long)l->tx_dropped);
+	fmt_print(buf, cap,
+		  "ok frames %lu executed %lu duplicates %lu naks %lu crc %lu oversize %lu "
+		  "truncated %lu other %lu txdrop %lu",
+		  (unsigned long)r->frames, (unsigned long)s->executed,
+		  (unsigned long)s->duplicates, (unsigned long)s->naks,
+		  (unsigned long)r->crc_errors, (unsigned long)r->oversize,
+		  (unsigned long)r->truncated, (unsigned long)r->other_bytes,
+		  (unsigned long)l->tx_dropped);
 }
 
 static bool link_extra(void *ctx, int argc, char **argv, char *reply, size_t cap)
@@ -59,8 +60,8 @@ static bool link_extra(void *ctx, int argc, char **argv, char *reply, size_t cap
 
 	if (argc >= 1 && np_streq_nocase(argv[0], "$link")) {
 		if (argc != 1)
-			snprintf(reply, cap, "error %d $link takes 0 arguments, got %d",
-				 CONSOLE_E_ARITY, argc - 1);
+			fmt_print(reply, cap, "error %d $link takes 0 arguments, got %d",
+				  CONSOLE_E_ARITY, argc - 1);
 		else
 			link_format_stats(l, reply, cap);
 		return true;
