@@ -65,16 +65,21 @@ static inline int64_t fx_clamp64(int64_t v, int64_t lo, int64_t hi)
 
 /* The hot helpers are inline: the control tick calls them dozens of times. */
 
-/* (a * b) >> 30 for a Q32 (or any int64) and a Q30 factor, rounded to nearest,
- * without a 128-bit intermediate (two 32x32->64 products, cheap on Cortex-M4). */
+/* (a * b) >> 30 for a Q32 (or any int64) and a Q30 factor, rounded to nearest;
+ * without 128-bit integers two 32x32->64 products (cheap on a Cortex-M4). */
 static inline int64_t fx_mul_q30(int64_t a, int32_t b_q30)
 {
+#ifdef __SIZEOF_INT128__
+	/* The same bits as the split form below: hi b 2^32 is a multiple of 2^30. */
+	return (int64_t)(((__int128)a * b_q30 + ((__int128)1 << 29)) >> 30);
+#else
 	/* a = hi * 2^32 + lo, lo unsigned; each partial product fits in 64 bits. */
 	int64_t hi = a >> 32;
 	int64_t lo = (int64_t)(uint32_t)(uint64_t)a;
 	int64_t p_hi = hi * b_q30;
 	int64_t p_lo = lo * b_q30;
 	return p_hi * 4 + ((p_lo + ((int64_t)1 << 29)) >> 30);
+#endif
 }
 
 /* floor(a * b / 2^32 + 1/2), saturating: the portable form, and the one a

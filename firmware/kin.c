@@ -120,7 +120,11 @@ void odom_integrate(fx_pose_t *pose, const fx_twist_t *d, fx_trig_cache_t *tc)
 		fx_sincos_cached(tc, mid, &s, &c);
 	else
 		fx_sincos_bam(mid, &s, &c);
-	pose->x_mm += fx_mul_q30(d->vx_pt, c) - fx_mul_q30(d->vy_pt, s);
-	pose->y_mm += fx_mul_q30(d->vx_pt, s) + fx_mul_q30(d->vy_pt, c);
+	pose->x_mm += fx_mul_q30(d->vx_pt, c);
+	pose->y_mm += fx_mul_q30(d->vx_pt, s);
+	if (d->vy_pt != 0) { /* mecanum only */
+		pose->x_mm -= fx_mul_q30(d->vy_pt, s);
+		pose->y_mm += fx_mul_q30(d->vy_pt, c);
+	}
 	pose->th_deg = fx_wrap_deg(pose->th_deg + d->w_pt);
 }

@@ -126,6 +126,14 @@ static int64_t ref_hypot(int64_t x, int64_t y)
 	return shift >= 0 ? (int64_t)(r << shift) : (int64_t)(r >> -shift);
 }
 
+/* fx_mul_q30's split form (the one without 128-bit integers). */
+static int64_t ref_mul_q30(int64_t a, int32_t b)
+{
+	int64_t hi = a >> 32;
+	int64_t lo = (int64_t)(uint32_t)(uint64_t)a;
+	return hi * b * 4 + ((lo * b + ((int64_t)1 << 29)) >> 30);
+}
+
 static int64_t any64(void)
 {
 	/* Every magnitude, both signs, and the edges. */
@@ -154,6 +162,9 @@ static void test_fast_forms_match_bitwise(void **state)
 			continue;
 		assert_int_equal(fx_div(a, b), ref_div(a, b));
 		assert_int_equal(fx_hypot(a >> 2, b >> 2), ref_hypot(a >> 2, b >> 2));
+		/* Products whose result fits: |a| < 2^62 with |b| <= 2^30. */
+		int32_t q30 = (int32_t)(b % (FX_Q30_ONE + 1LL));
+		assert_int_equal(fx_mul_q30(a >> 2, q30), ref_mul_q30(a >> 2, q30));
 		uint64_t v = (uint64_t)a ^ ((uint64_t)b << 1);
 		assert_int_equal(fx_isqrt64(v), ref_isqrt(v));
 	}
