@@ -403,6 +403,11 @@ bool vs_setPower(vehicle_t *v, bool OnOff)
 	if (v->powered)
 		return true;
 	bool ok = o->power_set(v->hal.ctx, true);
+	/* power_set may wait for the relay to settle (hal.h, at most 50 ms);
+	 * where commands run between ticks on the loop's thread that wait
+	 * delays the next tick. Nothing moves while unpowered, so the overrun
+	 * check restarts from the next tick instead of calling it late. */
+	v->have_now = false;
 	if (!ok || !o->power_feedback(v->hal.ctx)) {
 		/* Leave the relay commanded open rather than half-known. */
 		o->power_set(v->hal.ctx, false);

@@ -1108,6 +1108,28 @@ static void test_battery_thresholds(void **state)
 	expect_state(VS_STATE_POWERED, "Powered");
 }
 
+/* setPower(true) may wait up to 50 ms for the relay (hal.h) between two
+ * ticks: the next tick is not an overrun, a late one after it still is. */
+static void test_overrun_not_after_relay_wait(void **state)
+{
+	(void)state;
+	fake_run(&F, &V, 3);
+	assert_true(vs_setPower(&V, true));
+	F.now_us += 51000; /* the command's wait, then the tick */
+	vehicle_tick(&V, F.now_us);
+	vs_diag_t d;
+	vehicle_diag(&V, &d);
+	assert_int_equal(d.overruns, 0);
+	assert_int_equal(alarm_count(), 0);
+	F.now_us += 1000;
+	vehicle_tick(&V, F.now_us);
+	F.now_us += 1501;
+	vehicle_tick(&V, F.now_us);
+	vehicle_diag(&V, &d);
+	assert_int_equal(d.overruns, 1);
+	expect_fault(209, "control tick overrun");
+}
+
 static void test_overrun(void **state)
 {
 	(void)state;
@@ -1213,6 +1235,7 @@ int main(void)
 	    T(test_encoder_stuck),
 	    T(test_battery_thresholds),
 	    T(test_overrun),
+	    T(test_overrun_not_after_relay_wait),
 	    T(test_caution_input),
 	    T(test_warnings_do_not_block),
 	};
