@@ -70,3 +70,10 @@ $(BUILD)/ujoy: $(BUILD)/obj/hal/linux/sim/ujoy_main.o
 	$(Q)$(CC) $(LDFLAGS) -o $@ $^
 
 all: $(BUILD)/ujoy
+
+# CiA 402 drive simulator on SocketCAN for the QEMU guest tests (hal/linux/sim/).
+$(BUILD)/cia402-sim: $(BUILD)/obj/hal/linux/sim/cia402sim_main.o
+	@$(if $(Q),echo "  LD      $@")
+	$(Q)$(CC) $(LDFLAGS) -o $@ $^
+
+all: $(BUILD)/cia402-sim

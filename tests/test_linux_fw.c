@@ -105,6 +105,85 @@ static void test_backends_parsed(void **state)
 	assert_int_equal(b.bus[1].reg[BK_REG_FAULT_RESET], 41);
 	assert_int_equal(b.drive_type[1], BK_DRIVE_LOOPBACK);
 
+	/* The battery from a Modbus register: every attribute, then the
+	 * defaults (holding register, 16 bits, 1 mV per count, 200 ms). */
+	static const char mb_bus1[] =
+	    "    <modbus bus=\"1\" device=\"/dev/ttyUSB1\" reg_target_speed=\"0\"\n"
+	    "            reg_position=\"2\" reg_status=\"4\" reg_alarm=\"5\" reg_servo_on=\"6\"\n"
+	    "            reg_fault_reset=\"7\"/>\n";
+	char text[1024];
+	snprintf(text, sizeof(text),
+		 VEHICLE_HEAD
+		 "  <backends>\n"
+		 "    <battery source=\"modbus\" bus=\"1\" unit=\"10\" reg=\"513\"\n"
+		 "             reg_type=\"input\" width=\"32\" scale=\"0.5\" period_ms=\"50\"/>\n"
+		 "%s  </backends>\n</vehicle>\n",
+		 mb_bus1);
+	write_file(VPATH, text);
+	assert_int_equal(backend_cfg_load(VPATH, &b, err, sizeof(err)), 0);
+	assert_int_equal(b.battery_source, BK_BATTERY_MODBUS);
+	assert_int_equal(b.battery_mb.bus, 1);
+	assert_int_equal(b.battery_mb.unit, 10);
+	assert_int_equal(b.battery_mb.reg, 513);
+	assert_true(b.battery_mb.input);
+	assert_int_equal(b.battery_mb.words, 2);
+	assert_true(b.battery_scale == 0.5);
+	assert_int_equal(b.battery_mb.period_ms, 50);
+	snprintf(text, sizeof(text),
+		 VEHICLE_HEAD "  <backends>\n%s"
+			      "    <battery source=\"modbus\" bus=\"1\" unit=\"3\" reg=\"264\"/>\n"
+			      "  </backends>\n</vehicle>\n",
+		 mb_bus1);
+	write_file(VPATH, text);
+	assert_int_equal(backend_cfg_load(VPATH, &b, err, sizeof(err)), 0);
+	assert_int_equal(b.battery_source, BK_BATTERY_MODBUS);
+	assert_int_equal(b.battery_mb.unit, 3);
+	assert_int_equal(b.battery_mb.reg, 264);
+	assert_false(b.battery_mb.input);
+	assert_int_equal(b.battery_mb.words, 1);
+	assert_true(b.battery_scale == 1.0);
+	assert_int_equal(b.battery_mb.period_ms, 200);
+
+	/* CANopen buses and their CiA 402 drives: given and default attributes. */
+	write_file(VPATH,
+		   VEHICLE_HEAD "  <backends>\n"
+				"    <canopen bus=\"1\" interface=\"can1\" heartbeat_ms=\"50\"\n"
+				"             heartbeat_timeout_ms=\"175\" sdo_timeout_ms=\"30\"\n"
+				"             boot_timeout_ms=\"5000\" master_node=\"127\" "
+				"profile_accel=\"400000\"/>\n"
+				"    <canopen bus=\"0\" interface=\"vcan0\"/>\n"
+				"    <drive axis=\"0\" type=\"cia402\" bus=\"1\" node=\"3\"/>\n"
+				"    <drive axis=\"1\" type=\"cia402\" bus=\"0\" node=\"3\"/>\n"
+				"    <drive axis=\"2\" type=\"cia402\" bus=\"1\" node=\"126\"/>\n"
+				"  </backends>\n"
+				"</vehicle>\n");
+	assert_int_equal(backend_cfg_load(VPATH, &b, err, sizeof(err)), 0);
+	assert_int_equal(b.drive_type[0], BK_DRIVE_CIA402);
+	assert_int_equal(b.drive_bus[0], 1);
+	assert_int_equal(b.drive_node[0], 3);
+	assert_int_equal(b.drive_type[1], BK_DRIVE_CIA402);
+	assert_int_equal(b.drive_bus[1], 0);
+	assert_int_equal(b.drive_node[1], 3);
+	assert_int_equal(b.drive_node[2], 126);
+	assert_int_equal(b.drive_type[3], BK_DRIVE_LOOPBACK);
+	assert_true(b.canopen[1].used);
+	assert_string_equal(b.canopen[1].interface, "can1");
+	assert_int_equal(b.canopen[1].heartbeat_ms, 50);
+	assert_int_equal(b.canopen[1].heartbeat_timeout_ms, 175);
+	assert_int_equal(b.canopen[1].sdo_timeout_ms, 30);
+	assert_int_equal(b.canopen[1].boot_timeout_ms, 5000);
+	assert_int_equal(b.canopen[1].master_node, 127);
+	assert_int_equal(b.canopen[1].profile_accel, 400000);
+	assert_true(b.canopen[0].used);
+	assert_string_equal(b.canopen[0].interface, "vcan0");
+	assert_int_equal(b.canopen[0].heartbeat_ms, 100);
+	assert_int_equal(b.canopen[0].heartbeat_timeout_ms, 300);
+	assert_int_equal(b.canopen[0].sdo_timeout_ms, 100);
+	assert_int_equal(b.canopen[0].boot_timeout_ms, 2000);
+	assert_int_equal(b.canopen[0].master_node, 0);
+	assert_int_equal(b.canopen[0].profile_accel, 0);
+	assert_false(b.bus[0].used);
+
 	/* The core loader skips the section and still reads the rest. */
 	vs_config_t cfg;
 	assert_int_equal(config_load(VPATH, NULL, &cfg, NULL, err, sizeof(err)), 0);
@@ -176,6 +255,75 @@ static void test_backends_errors(void **state)
 	    {"<modbus bus=\"0\" device=\"ttyUSB0\"/>", "modbus.device: not a device path 'ttyUSB0'"},
 	    {"<modbus bus=\"0\" device=\"/dev/ttyUSB0\" timeout_ms=\"0\"/>",
 	     "modbus.timeout_ms: out of range 1..1000 '0'"},
+	    {"<battery source=\"modbus\" unit=\"1\" reg=\"5\"/>",
+	     "battery.bus: required with source modbus"},
+	    {"<battery source=\"modbus\" bus=\"0\" reg=\"5\"/>",
+	     "battery.unit: required with source modbus"},
+	    {"<battery bus=\"0\" unit=\"1\" source=\"modbus\"/>",
+	     "battery.reg: required with source modbus"},
+	    {"<battery source=\"modbus\" bus=\"0\" unit=\"0\" reg=\"5\"/>",
+	     "battery.unit: out of range 1..247 '0'"},
+	    {"<battery source=\"modbus\" bus=\"0\" unit=\"1\" reg=\"65536\"/>",
+	     "battery.reg: out of range 0..65535 '65536'"},
+	    {"<battery source=\"modbus\" bus=\"0\" unit=\"1\" reg=\"5\" reg_type=\"coil\"/>",
+	     "battery.reg_type: holding or input 'coil'"},
+	    {"<battery source=\"modbus\" bus=\"0\" unit=\"1\" reg=\"5\" width=\"8\"/>",
+	     "battery.width: 16 or 32 '8'"},
+	    {"<battery source=\"modbus\" bus=\"0\" unit=\"1\" reg=\"5\" period_ms=\"5\"/>",
+	     "battery.period_ms: out of range 10..1000 '5'"},
+	    {"<battery source=\"fixed\" mv=\"24000\" unit=\"3\"/>",
+	     "battery.unit: only for source modbus"},
+	    {"<battery source=\"modbus\" bus=\"1\" unit=\"1\" reg=\"5\"/>",
+	     "battery.bus: no <modbus bus=\"1\"> for the battery"},
+	    {"<drive axis=\"0\" type=\"cia402\" node=\"1\"/>", "drive.bus: required for cia402"},
+	    {"<drive axis=\"0\" type=\"cia402\" bus=\"0\"/>", "drive.node: required for cia402"},
+	    {"<drive axis=\"0\" type=\"cia402\" bus=\"0\" node=\"128\"/>",
+	     "drive.node: out of range 1..127 '128'"},
+	    {"<drive axis=\"0\" type=\"cia402\" bus=\"0\" node=\"0\"/>",
+	     "drive.node: out of range 1..127 '0'"},
+	    {"<drive axis=\"0\" type=\"cia402\" bus=\"2\" node=\"1\"/>",
+	     "drive.bus: out of range 0..1 '2'"},
+	    {"<drive axis=\"0\" type=\"modbus\" bus=\"0\" unit=\"1\" node=\"1\"/>",
+	     "drive.node: only for cia402"},
+	    {"<drive axis=\"0\" type=\"cia402\" bus=\"0\" node=\"1\" unit=\"1\"/>",
+	     "drive.unit: only for modbus"},
+	    {"<drive axis=\"0\" type=\"loopback\" bus=\"0\"/>",
+	     "drive.bus: only for modbus and cia402"},
+	    {"<drive axis=\"0\" type=\"cia402\" bus=\"1\" node=\"1\"/>",
+	     "drive.bus: no <canopen bus=\"1\"> for axis 0"},
+	    {"<canopen bus=\"0\"/>", "canopen.interface: required"},
+	    {"<canopen interface=\"can0\"/>", "canopen.bus: required"},
+	    {"<canopen bus=\"2\" interface=\"can0\"/>", "canopen.bus: out of range 0..1 '2'"},
+	    {"<canopen bus=\"0\" interface=\"can0/x\"/>",
+	     "canopen.interface: not an interface name 'can0/x'"},
+	    {"<canopen bus=\"0\" interface=\"can0123456789abcd\"/>",
+	     "canopen.interface: not an interface name 'can0123456789abcd'"},
+	    {"<canopen bus=\"0\" interface=\"\"/>", "canopen.interface: not an interface name ''"},
+	    {"<canopen bus=\"0\" interface=\"can0\" heartbeat_ms=\"100\" "
+	     "heartbeat_timeout_ms=\"100\"/>",
+	     "canopen.heartbeat_timeout_ms: not above heartbeat_ms '100'"},
+	    {"<canopen bus=\"0\" interface=\"can0\" heartbeat_ms=\"400\"/>",
+	     "canopen.heartbeat_timeout_ms: not above heartbeat_ms '300'"},
+	    {"<canopen bus=\"0\" interface=\"can0\" heartbeat_ms=\"10001\"/>",
+	     "canopen.heartbeat_ms: out of range 1..10000 '10001'"},
+	    {"<canopen bus=\"0\" interface=\"can0\" sdo_timeout_ms=\"0\"/>",
+	     "canopen.sdo_timeout_ms: out of range 1..10000 '0'"},
+	    {"<canopen bus=\"0\" interface=\"can0\" boot_timeout_ms=\"x\"/>",
+	     "canopen.boot_timeout_ms: not a number 'x'"},
+	    {"<canopen bus=\"0\" interface=\"can0\" master_node=\"128\"/>",
+	     "canopen.master_node: out of range 1..127 '128'"},
+	    {"<canopen bus=\"0\" interface=\"can0\" profile_accel=\"0\"/>",
+	     "canopen.profile_accel: out of range 1..2147483647 '0'"},
+	    {"<canopen bus=\"0\" interface=\"can0\" baud=\"500000\"/>",
+	     "canopen.baud: unknown attribute"},
+	    {"<canopen bus=\"0\" interface=\"can0\"/><canopen bus=\"0\" interface=\"can1\"/>",
+	     "canopen.bus: duplicate '0'"},
+	    {"<canopen bus=\"0\" interface=\"can0\" master_node=\"1\"/>"
+	     "<drive axis=\"0\" type=\"cia402\" bus=\"0\" node=\"1\"/>",
+	     "drive.node: the master_node of canopen bus 0 '1'"},
+	    {"<canopen bus=\"0\" interface=\"can0\"/><drive axis=\"0\" type=\"cia402\" "
+	     "bus=\"0\" node=\"3\"/><drive axis=\"2\" type=\"cia402\" bus=\"0\" node=\"3\"/>",
+	     "drive.node: also axis 0's node on canopen bus 0 '3'"},
 	    {"<drive axis=\"0\" type=\"loopback\"><x/></drive>", "x: unknown element"},
 	};
 	for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
@@ -249,6 +397,7 @@ static void test_joystick_cfg_and_scaling(void **state)
 	assert_int_equal(js.axis[0], -32);
 	j.present = false;
 	j.fd = -1;
+	ljoy_close(&j);
 }
 
 /* The shipped example loads with both loaders. */

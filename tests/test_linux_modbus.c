@@ -1,7 +1,8 @@
 /* vehicle-fw's Modbus RTU backend against mbdrive-sim (libmodbus server,
  * two units on one bus) over a socat pty pair; the command link on a
  * second pty. Moves, a drive reporting an error, fault reset, a drive that
- * stops answering mid-move, SIGTERM. */
+ * stops answering mid-move, SIGTERM; the battery voltage from a register of
+ * a drive's unit and of a BMS of its own, changing, failing and returning. */
 #include <errno.h>
 #include <fcntl.h>
 #include <libgen.h>
@@ -26,7 +27,7 @@ static char BUILD_DIR[512] = "build";
 static char DIR_[] = "/tmp/vsmbXXXXXX";
 static char VPATH[600], IOPATH[600], LOGPATH[600], BUS_A[600], BUS_B[600];
 static pid_t SOCAT = -1, SIM = -1, FW = -1;
-static int MASTER = -1;
+static int MASTER = -1, SIM_CTL = -1; /* SIM_CTL: the simulator's stdin */
 
 static void write_file(const char *path, const char *text)
 {
@@ -43,8 +44,12 @@ static void sleep_ms(long ms)
 		;
 }
 
-static pid_t spawn(const char *log, char *const argv[])
+/* in: NULL, or where to put the write end of a pipe to its stdin. */
+static pid_t spawn(const char *log, char *const argv[], int *in)
 {
+	int pfd[2] = {-1, -1};
+	if (in)
+		assert_int_equal(pipe(pfd), 0);
 	pid_t p = fork();
 	assert_true(p >= 0);
 	if (p == 0) {
@@ -52,10 +57,33 @@ static pid_t spawn(const char *log, char *const argv[])
 		dup2(fd, 2);
 		int nul = open("/dev/null", O_WRONLY);
 		dup2(nul, 1);
+		if (in) {
+			dup2(pfd[0], 0);
+			close(pfd[0]);
+			close(pfd[1]);
+		}
 		execvp(argv[0], argv);
 		_exit(127);
 	}
+	if (in) {
+		close(pfd[0]);
+		*in = pfd[1];
+	}
 	return p;
+}
+
+/* One control line to the simulator (mbdrive_sim_main.c). */
+static void sim_ctl(const char *line)
+{
+	assert_int_equal(write(SIM_CTL, line, strlen(line)), (ssize_t)strlen(line));
+	assert_int_equal(write(SIM_CTL, "\n", 1), 1);
+}
+
+static long now_ms(void)
+{
+	struct timespec t;
+	clock_gettime(CLOCK_MONOTONIC, &t);
+	return (long)t.tv_sec * 1000L + t.tv_nsec / 1000000L;
 }
 
 static void reap(pid_t *p, int sig)
@@ -93,19 +121,59 @@ static void expect(const char *line, const char *want)
 	assert_string_equal(reply, want);
 }
 
-/* Polls getState until it reads want (bounded). */
-static void wait_state(const char *want, long ms)
+/* Polls an operation until it replies want (bounded by ms). */
+static void wait_reply(const char *line, const char *want, long ms)
 {
 	char reply[512];
-	for (long t = 0; t < ms; t += 20) {
-		console("getState", reply, sizeof(reply));
+	long end = now_ms() + ms;
+	do {
+		console(line, reply, sizeof(reply));
 		if (!strcmp(reply, want))
 			return;
 		sleep_ms(20);
-	}
-	print_message("getState: '%s', expected '%s'\n", reply, want);
+	} while (now_ms() < end);
+	print_message("%s: '%s', expected '%s'\n", line, reply, want);
 	fail();
 }
+
+static void wait_state(const char *want, long ms)
+{
+	wait_reply("getState", want, ms);
+}
+
+static void read_log(char *buf, size_t cap)
+{
+	FILE *f = fopen(LOGPATH, "r");
+	assert_non_null(f);
+	size_t n = fread(buf, 1, cap - 1, f);
+	buf[n] = '\0';
+	fclose(f);
+}
+
+/* Polls vehicle-fw's log until it holds text (bounded by ms). */
+static void wait_log(const char *text, long ms)
+{
+	char log[8192];
+	long end = now_ms() + ms;
+	do {
+		read_log(log, sizeof(log));
+		if (strstr(log, text))
+			return;
+		sleep_ms(20);
+	} while (now_ms() < end);
+	print_message("log without '%s':\n%s", text, log);
+	fail();
+}
+
+/* The simulator's battery: on drive unit 1 (holding register 0x108, 10 mV
+ * per count) or on a unit of its own, a BMS (unit 10, input registers
+ * 0x201-0x202, uint32 mV). */
+#define BATTERY_ON_DRIVE                                                                           \
+	"    <battery source=\"modbus\" bus=\"0\" unit=\"1\" reg=\"264\" scale=\"10\"/>\n"
+#define BATTERY_BMS                                                                                \
+	"    <battery source=\"modbus\" bus=\"0\" unit=\"10\" reg=\"513\" reg_type=\"input\"\n"    \
+	"             width=\"32\" period_ms=\"100\"/>\n"
+static const char *SIM_BATTERY = "1", *SIM_BATTERY_MV = "25200", *BATTERY_XML = BATTERY_ON_DRIVE;
 
 /* socat and the simulator, no vehicle-fw. */
 static int setup_bus(void **state)
@@ -119,37 +187,53 @@ static int setup_bus(void **state)
 	snprintf(la, sizeof(la), "pty,raw,echo=0,link=%s", BUS_A);
 	snprintf(lb, sizeof(lb), "pty,raw,echo=0,link=%s", BUS_B);
 	char *sa[] = {"socat", la, lb, NULL};
-	SOCAT = spawn(NULL, sa);
+	SOCAT = spawn(NULL, sa, NULL);
 	for (int i = 0; i < 100 && (stat(BUS_A, &sb) || stat(BUS_B, &sb)); i++)
 		sleep_ms(20);
 	assert_int_equal(stat(BUS_B, &sb), 0);
 
 	snprintf(exe, sizeof(exe), "%s/mbdrive-sim", BUILD_DIR);
-	char *sm[] = {exe, "--port", BUS_A, "--units", "1,2", NULL};
-	SIM = spawn(NULL, sm);
+	char *sm[] = {exe,
+		      "--port",
+		      BUS_A,
+		      "--units",
+		      "1,2",
+		      "--battery",
+		      (char *)SIM_BATTERY,
+		      "--battery-mv",
+		      (char *)SIM_BATTERY_MV,
+		      NULL};
+	SIM = spawn(NULL, sm, &SIM_CTL);
 	sleep_ms(200); /* the simulator opens its port */
 	return 0;
 }
 
-static int setup(void **state)
+static long FW_START_MS;
+
+/* vehicle-fw on the bus that setup_bus started. */
+static void start_fw(void)
 {
 	char text[2048], exe[700];
-	setup_bus(state);
-
-	/* timeout x (retries + 1) = 30 ms, inside the 50 ms drive timeout. */
-	snprintf(text, sizeof(text),
-		 "<vehicle kinematics=\"differential\" tick_hz=\"100\">\n"
-		 "  <devices contact_sensor=\"false\" obstacle_input=\"false\" estop=\"false\"\n"
-		 "           joystick=\"false\"/>\n"
-		 "  <backends>\n"
-		 "    <modbus bus=\"0\" device=\"%s\" baud=\"115200\" timeout_ms=\"15\" retries=\"1\"\n"
-		 "            reg_target_speed=\"256\" reg_position=\"258\" reg_status=\"260\"\n"
-		 "            reg_alarm=\"261\" reg_servo_on=\"262\" reg_fault_reset=\"263\"/>\n"
-		 "    <drive axis=\"0\" type=\"modbus\" bus=\"0\" unit=\"1\"/>\n"
-		 "    <drive axis=\"1\" type=\"modbus\" bus=\"0\" unit=\"2\"/>\n"
-		 "  </backends>\n"
-		 "</vehicle>\n",
-		 BUS_B);
+	/* timeout x (retries + 1) = 30 ms, inside the drive timeout. That is
+	 * 250 ms, not the product's 50: socat, the simulator and the bus thread
+	 * are normal processes, which a busy test host delays by tens of ms.
+	 * The tick runs at SCHED_FIFO where permitted, as on the vehicle. */
+	snprintf(
+	    text, sizeof(text),
+	    "<vehicle kinematics=\"differential\" tick_hz=\"100\">\n"
+	    "  <devices contact_sensor=\"false\" obstacle_input=\"false\" estop=\"false\"\n"
+	    "           joystick=\"false\"/>\n"
+	    "  <supervision drive_timeout_ms=\"250\"/>\n"
+	    "  <backends>\n"
+	    "    <modbus bus=\"0\" device=\"%s\" baud=\"115200\" timeout_ms=\"15\" retries=\"1\"\n"
+	    "            reg_target_speed=\"256\" reg_position=\"258\" reg_status=\"260\"\n"
+	    "            reg_alarm=\"261\" reg_servo_on=\"262\" reg_fault_reset=\"263\"/>\n"
+	    "    <drive axis=\"0\" type=\"modbus\" bus=\"0\" unit=\"1\"/>\n"
+	    "    <drive axis=\"1\" type=\"modbus\" bus=\"0\" unit=\"2\"/>\n"
+	    "%s"
+	    "  </backends>\n"
+	    "</vehicle>\n",
+	    BUS_B, BATTERY_XML);
 	write_file(VPATH, text);
 	write_file(IOPATH, "<io/>\n");
 
@@ -162,11 +246,18 @@ static int setup(void **state)
 	cfmakeraw(&t);
 	tcsetattr(MASTER, TCSANOW, &t);
 	snprintf(exe, sizeof(exe), "%s/vehicle-fw", BUILD_DIR);
-	char *fa[] = {exe,	"--config", VPATH,	   "--io", IOPATH, "--port",
-		      port, "--rt-priority", (char *)"0", NULL};
-	FW = spawn(LOGPATH, fa);
+	char *fa[] = {exe,	"--config", VPATH,	     "--io",	   IOPATH,
+		      "--port", port,	    "--rt-priority", (char *)"10", NULL};
+	FW_START_MS = now_ms();
+	FW = spawn(LOGPATH, fa, NULL);
 	close(slave);
 	sleep_ms(300);
+}
+
+static int setup(void **state)
+{
+	setup_bus(state);
+	start_fw();
 	return 0;
 }
 
@@ -179,7 +270,27 @@ static int teardown(void **state)
 	if (MASTER >= 0)
 		close(MASTER);
 	MASTER = -1;
+	if (SIM_CTL >= 0)
+		close(SIM_CTL);
+	SIM_CTL = -1;
 	return 0;
+}
+
+/* The battery on a BMS of its own (unit 10), starting at 24.68 V. */
+static int setup_bms(void **state)
+{
+	SIM_BATTERY = "10";
+	SIM_BATTERY_MV = "24680";
+	BATTERY_XML = BATTERY_BMS;
+	return setup(state);
+}
+
+static int teardown_bms(void **state)
+{
+	SIM_BATTERY = "1";
+	SIM_BATTERY_MV = "25200";
+	BATTERY_XML = BATTERY_ON_DRIVE;
+	return teardown(state);
 }
 
 static void test_move_over_modbus(void **state)
@@ -192,6 +303,9 @@ static void test_move_over_modbus(void **state)
 	/* status bit 0 of both drives, read back over the bus */
 	expect("getServoStatus 0", "ok true true");
 	expect("getServoStatus 1", "ok true true");
+	/* The battery from drive unit 1's register 0x108: 2520 x 10 mV, in
+	 * the interface's 0.1 V units. */
+	expect("getBatteryVoltage", "ok true 252.000");
 	expect("moveForward 300", "ok true");
 	wait_state("ok true 16 \"Ready\"", 4000);
 	/* Odometry from the drives' position registers: the 300 mm move,
@@ -252,13 +366,114 @@ static void test_drive_silent_then_sigterm(void **state)
 	    strstr(log, "vehicle-fw: final state: unpowered, relay open, servo off, stopped\n"));
 }
 
+/* The battery on a BMS of its own: exact values as they change, a silent
+ * BMS that keeps the last value (the drives unaffected) until 2 s without
+ * a reading give 0 V and fault 207, then its return. */
+static void test_battery_bms(void **state)
+{
+	(void)state;
+	char reply[512], log[8192], want[1024];
+	expect("getBatteryVoltage", "ok true 246.800");
+	expect("setPower true", "ok true");
+	expect("setServo true", "ok true");
+	wait_state("ok true 16 \"Ready\"", 1000);
+
+	/* Below the 22.0 V low threshold: warning 140, nothing stops. */
+	sim_ctl("battery 21500");
+	wait_reply("getBatteryVoltage", "ok true 215.000", 1000);
+	expect("getActiveAlarm 4", "ok true 1 1 140 warning \"battery below 22.0 V\"");
+	sim_ctl("battery 23000");
+	wait_reply("getBatteryVoltage", "ok true 230.000", 1000);
+	expect("clearAlarm", "ok true");
+	expect("getState", "ok true 16 \"Ready\"");
+
+	/* Silent for 1 s: the last value holds, the failed reads are counted,
+	 * the unit stays ready (its drives still answer). */
+	sim_ctl("battery silent");
+	long t0 = now_ms();
+	sleep_ms(1000);
+	expect("getBatteryVoltage", "ok true 230.000");
+	expect("getState", "ok true 16 \"Ready\"");
+	console("$rt", reply, sizeof(reply));
+	const char *e = strstr(reply, " battery_errors ");
+	assert_non_null(e);
+	long errors = strtol(e + 16, NULL, 10);
+	/* one read per 100 ms period (at most 11 in the second), each failing
+	 * after its 15 ms timeout; a busy host may delay some */
+	if (errors < 3 || errors > 11)
+		print_message("$rt: '%s'\n", reply);
+	assert_true(errors >= 3 && errors <= 11);
+
+	/* 2 s without a reading: 0 V, the critical fault stops the unit. */
+	wait_state("ok true 19 \"Alarm-207\"", 2000);
+	long dt = now_ms() - t0;
+	if (dt < 1850)
+		print_message("fault 207 after %ld ms of silence\n", dt);
+	assert_true(dt >= 1850);
+	expect("getBatteryVoltage", "ok true 0.000");
+	expect("getActiveAlarm 4", "ok true 2 2 140 warning \"battery below 22.0 V\" 207 fault "
+				   "\"battery below 20.0 V\"");
+	expect("getServoStatus 0", "ok true false");
+	/* While it stays silent the fault is raised again. */
+	expect("clearAlarm", "ok true");
+	wait_state("ok true 19 \"Alarm-207\"", 500);
+
+	/* The BMS answers again: the voltage is back, clearAlarm holds. */
+	sim_ctl("battery answer");
+	wait_reply("getBatteryVoltage", "ok true 230.000", 1000);
+	expect("clearAlarm", "ok true");
+	expect("getState", "ok true 24 \"Powered\"");
+	read_log(log, sizeof(log));
+	snprintf(
+	    want, sizeof(want),
+	    "vehicle-fw: warning: battery: no reading from unit 10 on %s for 2000 ms: it reads 0 "
+	    "V until it answers\n",
+	    BUS_B);
+	assert_non_null(strstr(log, want));
+	snprintf(want, sizeof(want), "vehicle-fw: battery: unit 10 on %s answers again: 23000 mV\n",
+		 BUS_B);
+	assert_non_null(strstr(log, want));
+}
+
+/* A BMS that does not answer at start: vehicle-fw waits for it 2 s, then
+ * starts with 0 V (fault 207) and takes its first reading when it comes. */
+static int setup_bms_silent(void **state)
+{
+	SIM_BATTERY = "10";
+	SIM_BATTERY_MV = "24680";
+	BATTERY_XML = BATTERY_BMS;
+	setup_bus(state);
+	sim_ctl("battery silent");
+	sleep_ms(50);
+	start_fw();
+	return 0;
+}
+
+static void test_battery_absent_at_start(void **state)
+{
+	(void)state;
+	/* The link is served once the start-up wait is over. */
+	wait_log("battery: no reading from unit 10 on ", 4000);
+	assert_true(now_ms() - FW_START_MS >= 1950);
+	wait_state("ok true 19 \"Alarm-207\"", 1000);
+	expect("getBatteryVoltage", "ok true 0.000");
+	sim_ctl("battery answer");
+	wait_reply("getBatteryVoltage", "ok true 246.800", 1000);
+	expect("clearAlarm", "ok true");
+	expect("getState", "ok true 25 \"Unpowered\"");
+}
+
 /* The simulator's register map as an independent client (pymodbus) sees
  * it: the same encoding the backend uses. */
 static void test_pymodbus_crosscheck(void **state)
 {
 	(void)state;
 	char cmd[1500], out[1024];
-	snprintf(cmd, sizeof(cmd), "/usr/bin/python3 hal/linux/sim/mb_crosscheck.py %s %d 2>&1", BUS_B,
+	/* Above 65535 mV: the 32-bit register pair has a high word. */
+	sim_ctl("battery 71850");
+	sleep_ms(50);
+	snprintf(cmd, sizeof(cmd),
+		 "/usr/bin/python3 hal/linux/sim/mb_crosscheck.py %s %d 1 71850 2>&1", BUS_B,
 		 (int)SIM);
 	FILE *p = popen(cmd, "r");
 	assert_non_null(p);
@@ -278,6 +493,9 @@ int main(int argc, char **argv)
 	    cmocka_unit_test_setup_teardown(test_move_over_modbus, setup, teardown),
 	    cmocka_unit_test_setup_teardown(test_drive_error, setup, teardown),
 	    cmocka_unit_test_setup_teardown(test_drive_silent_then_sigterm, setup, teardown),
+	    cmocka_unit_test_setup_teardown(test_battery_bms, setup_bms, teardown_bms),
+	    cmocka_unit_test_setup_teardown(test_battery_absent_at_start, setup_bms_silent,
+					    teardown_bms),
 	};
 	if (argc > 0) {
 		char tmp[512];

@@ -92,11 +92,20 @@ static bool rt_extra(void *ctx, int argc, char **argv, char *reply, size_t cap)
 	}
 	snprintf(reply, cap,
 		 "ok period_us %u ticks %llu overruns %llu max_late_us %u skipped %llu sched %s "
-		 "prio %d mlock %s gpio_errors %u joystick %s",
+		 "prio %d mlock %s gpio_errors %u joystick %s battery_errors %u",
 		 a->period_us, (unsigned long long)a->st.ticks, (unsigned long long)a->st.overruns,
 		 a->st.max_late_us, (unsigned long long)a->st.skipped, a->rt.fifo ? "fifo" : "other",
 		 a->rt.priority, a->rt.locked ? "yes" : "no", a->hal.gpio.errors,
-		 !a->hal.bk.joystick.used ? "none" : a->hal.joy.present ? "present" : "absent");
+		 !a->hal.bk.joystick.used ? "none" : a->hal.joy.present ? "present" : "absent",
+		 a->hal.battery_errors);
+	/* then one group of counters per CANopen bus */
+	for (unsigned b = 0; b < BK_CANOPEN_BUSES; b++) {
+		size_t n = strlen(reply);
+		if (a->hal.can[b].used && n + 2 < cap) {
+			reply[n++] = ' ';
+			co_bus_counters(&a->hal.can[b], reply + n, cap - n);
+		}
+	}
 	return true;
 }
 
@@ -361,6 +370,14 @@ int main(int argc, char **argv)
 	       "%u firmware overruns",
 	       (unsigned long long)a->st.ticks, (unsigned long long)a->st.overruns,
 	       a->st.max_late_us, (unsigned long long)a->st.skipped, d.overruns);
+	if (bk.battery_source != BK_BATTERY_FIXED)
+		rt_log(LOG_INFO, "exit: %u failed battery reads", a->hal.battery_errors);
+	for (unsigned b = 0; b < BK_CANOPEN_BUSES; b++)
+		if (a->hal.can[b].used) {
+			char c[200];
+			co_bus_counters(&a->hal.can[b], c, sizeof(c));
+			rt_log(LOG_INFO, "exit: %s", c);
+		}
 	lhal_close(&a->hal);
 	if (port)
 		close(a->in_fd);

@@ -23,6 +23,7 @@ typedef struct {
 	backend_cfg_t *b;
 	unsigned long drive_line[VS_MAX_AXES];
 	unsigned long at_line; /* nonzero: report this line instead of the parser's */
+	unsigned long battery_line;
 } bctx_t;
 
 static const char *const line_names[BK_LINE_SERVO0 + 1] = {
@@ -43,6 +44,8 @@ void backend_cfg_defaults(backend_cfg_t *b)
 	b->battery_source = BK_BATTERY_FIXED;
 	b->battery_mv = 24000;
 	b->battery_scale = 1.0;
+	b->battery_mb.words = 1;
+	b->battery_mb.period_ms = 200;
 	for (int i = 0; i < 3; i++) {
 		b->joystick.code[i] = -1;
 		b->joystick.scale[i] = 1.0;
@@ -98,9 +101,12 @@ static int get_bool(bctx_t *c, const char *el, const char *at, const char *v, bo
 	return 0;
 }
 
+/* drive.bus is one range for both bus types */
+_Static_assert(BK_CANOPEN_BUSES == BK_MODBUS_BUSES, "drive.bus range");
+
 static int drive_elem(bctx_t *c, const XML_Char **a)
 {
-	uint32_t axis = UINT32_MAX, bus = UINT32_MAX, unit = UINT32_MAX;
+	uint32_t axis = UINT32_MAX, bus = UINT32_MAX, unit = UINT32_MAX, node = UINT32_MAX;
 	int type = -1;
 	for (; a[0]; a += 2) {
 		if (!strcmp(a[0], "axis")) {
@@ -111,6 +117,8 @@ static int drive_elem(bctx_t *c, const XML_Char **a)
 				type = BK_DRIVE_LOOPBACK;
 			else if (!strcmp(a[1], "modbus"))
 				type = BK_DRIVE_MODBUS;
+			else if (!strcmp(a[1], "cia402"))
+				type = BK_DRIVE_CIA402;
 			else
 				return fail(c, "drive.type: unknown backend '%s'", a[1]);
 		} else if (!strcmp(a[0], "bus")) {
@@ -118,6 +126,9 @@ static int drive_elem(bctx_t *c, const XML_Char **a)
 				return -1;
 		} else if (!strcmp(a[0], "unit")) {
 			if (get_uint(c, "drive", "unit", a[1], 1, 247, &unit))
+				return -1;
+		} else if (!strcmp(a[0], "node")) {
+			if (get_uint(c, "drive", "node", a[1], 1, 127, &node))
 				return -1;
 		} else {
 			return fail(c, "drive.%s: unknown attribute", a[0]);
@@ -132,9 +143,19 @@ static int drive_elem(bctx_t *c, const XML_Char **a)
 			return fail(c, "drive.%s: required for modbus", bus == UINT32_MAX ? "bus" : "unit");
 		c->b->drive_bus[axis] = (uint8_t)bus;
 		c->b->drive_unit[axis] = (uint8_t)unit;
-	} else if (bus != UINT32_MAX || unit != UINT32_MAX) {
-		return fail(c, "drive.%s: only for modbus", bus != UINT32_MAX ? "bus" : "unit");
+	} else if (type == BK_DRIVE_CIA402) {
+		if (bus == UINT32_MAX || node == UINT32_MAX)
+			return fail(c, "drive.%s: required for cia402",
+				    bus == UINT32_MAX ? "bus" : "node");
+		c->b->drive_bus[axis] = (uint8_t)bus;
+		c->b->drive_node[axis] = (uint8_t)node;
+	} else if (bus != UINT32_MAX) {
+		return fail(c, "drive.bus: only for modbus and cia402");
 	}
+	if (unit != UINT32_MAX && type != BK_DRIVE_MODBUS)
+		return fail(c, "drive.unit: only for modbus");
+	if (node != UINT32_MAX && type != BK_DRIVE_CIA402)
+		return fail(c, "drive.node: only for cia402");
 	c->b->drive_type[axis] = (uint8_t)type;
 	c->drive_line[axis] = (unsigned long)XML_GetCurrentLineNumber(c->p);
 	return 0;
@@ -201,6 +222,59 @@ static int modbus_elem(bctx_t *c, const XML_Char **a)
 	return 0;
 }
 
+static int canopen_elem(bctx_t *c, const XML_Char **a)
+{
+	bk_canopen_bus_t m = {.heartbeat_ms = 100,
+			      .heartbeat_timeout_ms = 300,
+			      .sdo_timeout_ms = 100,
+			      .boot_timeout_ms = 2000};
+	const struct {
+		const char *name;
+		uint32_t *dst;
+		unsigned long min, max;
+	} num[] = {
+	    {"heartbeat_ms", &m.heartbeat_ms, 1, 10000},
+	    {"heartbeat_timeout_ms", &m.heartbeat_timeout_ms, 2, 60000},
+	    {"sdo_timeout_ms", &m.sdo_timeout_ms, 1, 10000},
+	    {"boot_timeout_ms", &m.boot_timeout_ms, 1, 60000},
+	    {"master_node", &m.master_node, 1, 127},
+	    {"profile_accel", &m.profile_accel, 1, 0x7FFFFFFFul},
+	};
+	uint32_t bus = UINT32_MAX;
+	for (; a[0]; a += 2) {
+		size_t k = 0;
+		while (k < sizeof(num) / sizeof(num[0]) && strcmp(a[0], num[k].name) != 0)
+			k++;
+		if (k < sizeof(num) / sizeof(num[0])) {
+			if (get_uint(c, "canopen", a[0], a[1], num[k].min, num[k].max, num[k].dst))
+				return -1;
+		} else if (!strcmp(a[0], "bus")) {
+			if (get_uint(c, "canopen", "bus", a[1], 0, BK_CANOPEN_BUSES - 1, &bus))
+				return -1;
+		} else if (!strcmp(a[0], "interface")) {
+			if (a[1][0] == '\0' || strlen(a[1]) >= sizeof(m.interface) ||
+			    strchr(a[1], '/') || strchr(a[1], ' '))
+				return fail(c, "canopen.interface: not an interface name '%s'",
+					    a[1]);
+			snprintf(m.interface, sizeof(m.interface), "%s", a[1]);
+		} else {
+			return fail(c, "canopen.%s: unknown attribute", a[0]);
+		}
+	}
+	if (bus == UINT32_MAX)
+		return fail(c, "canopen.bus: required");
+	if (!m.interface[0])
+		return fail(c, "canopen.interface: required");
+	if (m.heartbeat_timeout_ms <= m.heartbeat_ms)
+		return fail(c, "canopen.heartbeat_timeout_ms: not above heartbeat_ms '%u'",
+			    m.heartbeat_timeout_ms);
+	if (c->b->canopen[bus].used)
+		return fail(c, "canopen.bus: duplicate '%u'", bus);
+	m.used = true;
+	c->b->canopen[bus] = m;
+	return 0;
+}
+
 static int power_elem(bctx_t *c, const XML_Char **a)
 {
 	for (; a[0]; a += 2) {
@@ -212,15 +286,64 @@ static int power_elem(bctx_t *c, const XML_Char **a)
 	return 0;
 }
 
+/* The attributes of source="modbus"; judged after the loop, as source may
+ * come last. */
+static int battery_modbus_attr(bctx_t *c, const XML_Char **a, bool *hit)
+{
+	bk_battery_modbus_t *m = &c->b->battery_mb;
+	uint32_t v = 0;
+	*hit = true;
+	if (!strcmp(a[0], "bus")) {
+		if (get_uint(c, "battery", "bus", a[1], 0, BK_MODBUS_BUSES - 1, &v))
+			return -1;
+		m->bus = (uint8_t)v;
+	} else if (!strcmp(a[0], "unit")) {
+		if (get_uint(c, "battery", "unit", a[1], 1, 247, &v))
+			return -1;
+		m->unit = (uint8_t)v;
+	} else if (!strcmp(a[0], "reg")) {
+		if (get_uint(c, "battery", "reg", a[1], 0, 65535, &v))
+			return -1;
+		m->reg = (uint16_t)v;
+	} else if (!strcmp(a[0], "reg_type")) {
+		if (strcmp(a[1], "holding") != 0 && strcmp(a[1], "input") != 0)
+			return fail(c, "battery.reg_type: holding or input '%s'", a[1]);
+		m->input = a[1][0] == 'i';
+	} else if (!strcmp(a[0], "width")) {
+		if (strcmp(a[1], "16") != 0 && strcmp(a[1], "32") != 0)
+			return fail(c, "battery.width: 16 or 32 '%s'", a[1]);
+		m->words = a[1][0] == '3' ? 2 : 1;
+	} else if (!strcmp(a[0], "period_ms")) {
+		if (get_uint(c, "battery", "period_ms", a[1], 10, 1000, &m->period_ms))
+			return -1;
+	} else {
+		*hit = false;
+	}
+	return 0;
+}
+
 static int battery_elem(bctx_t *c, const XML_Char **a)
 {
 	backend_cfg_t *b = c->b;
+	const char *mb_attr = NULL; /* the first modbus-only attribute given */
+	bool have_bus = false, have_unit = false, have_reg = false;
+	c->battery_line = (unsigned long)XML_GetCurrentLineNumber(c->p);
 	for (; a[0]; a += 2) {
-		if (!strcmp(a[0], "source")) {
+		bool mb = false;
+		if (battery_modbus_attr(c, a, &mb))
+			return -1;
+		if (mb) {
+			mb_attr = mb_attr ? mb_attr : a[0];
+			have_bus = have_bus || !strcmp(a[0], "bus");
+			have_unit = have_unit || !strcmp(a[0], "unit");
+			have_reg = have_reg || !strcmp(a[0], "reg");
+		} else if (!strcmp(a[0], "source")) {
 			if (!strcmp(a[1], "fixed"))
 				b->battery_source = BK_BATTERY_FIXED;
 			else if (!strcmp(a[1], "iio"))
 				b->battery_source = BK_BATTERY_IIO;
+			else if (!strcmp(a[1], "modbus"))
+				b->battery_source = BK_BATTERY_MODBUS;
 			else
 				return fail(c, "battery.source: unknown source '%s'", a[1]);
 		} else if (!strcmp(a[0], "mv")) {
@@ -244,6 +367,15 @@ static int battery_elem(bctx_t *c, const XML_Char **a)
 	}
 	if (b->battery_source == BK_BATTERY_IIO && b->battery_path[0] == '\0')
 		return fail(c, "battery.path: required with source iio");
+	if (b->battery_source == BK_BATTERY_MODBUS) {
+		const char *missing = !have_reg ? "reg" : NULL;
+		missing = !have_unit ? "unit" : missing;
+		missing = !have_bus ? "bus" : missing;
+		if (missing)
+			return fail(c, "battery.%s: required with source modbus", missing);
+	}
+	if (b->battery_source != BK_BATTERY_MODBUS && mb_attr)
+		return fail(c, "battery.%s: only for source modbus", mb_attr);
 	return 0;
 }
 
@@ -368,6 +500,8 @@ static void XMLCALL on_start(void *ud, const XML_Char *name, const XML_Char **at
 		drive_elem(c, atts);
 	else if (!strcmp(name, "modbus"))
 		modbus_elem(c, atts);
+	else if (!strcmp(name, "canopen"))
+		canopen_elem(c, atts);
 	else if (!strcmp(name, "power"))
 		power_elem(c, atts);
 	else if (!strcmp(name, "battery"))
@@ -427,5 +561,29 @@ int backend_cfg_load(const char *path, backend_cfg_t *b, char *err, size_t errle
 			return fail(&c, "drive.bus: no <modbus bus=\"%u\"> for axis %u",
 				    b->drive_bus[i], i);
 		}
+	if (b->battery_source == BK_BATTERY_MODBUS && !b->bus[b->battery_mb.bus].used) {
+		c.at_line = c.battery_line;
+		return fail(&c, "battery.bus: no <modbus bus=\"%u\"> for the battery",
+			    b->battery_mb.bus);
+	}
+	for (unsigned i = 0; i < VS_MAX_AXES; i++) {
+		if (b->drive_type[i] != BK_DRIVE_CIA402)
+			continue;
+		const bk_canopen_bus_t *co = &b->canopen[b->drive_bus[i]];
+		c.at_line = c.drive_line[i];
+		if (!co->used)
+			return fail(&c, "drive.bus: no <canopen bus=\"%u\"> for axis %u",
+				    b->drive_bus[i], i);
+		if (b->drive_node[i] == co->master_node)
+			return fail(&c, "drive.node: the master_node of canopen bus %u '%u'",
+				    b->drive_bus[i], b->drive_node[i]);
+		for (unsigned j = 0; j < i; j++)
+			if (b->drive_type[j] == BK_DRIVE_CIA402 &&
+			    b->drive_bus[j] == b->drive_bus[i] &&
+			    b->drive_node[j] == b->drive_node[i])
+				return fail(
+				    &c, "drive.node: also axis %u's node on canopen bus %u '%u'", j,
+				    b->drive_bus[i], b->drive_node[i]);
+	}
 	return 0;
 }

@@ -6,13 +6,19 @@
  *
  *   <vehicle ...>
  *     <backends>
- *       <drive axis="0" type="loopback"/>      one per axis; type: loopback | modbus
+ *       <drive axis="0" type="loopback"/>      one per axis; type: loopback | modbus | cia402
  *       <drive axis="1" type="modbus" bus="0" unit="2"/>
+ *       <drive axis="2" type="cia402" bus="0" node="1"/>
+ *       <canopen bus="0" interface="can0" heartbeat_ms="100" heartbeat_timeout_ms="300"
+ *                sdo_timeout_ms="100" boot_timeout_ms="2000" master_node="127"
+ *                profile_accel="100000"/>
  *       <modbus bus="0" device="/dev/ttyUSB0" baud="115200" parity="N" stop_bits="1"
  *               timeout_ms="20" retries="1" reg_target_speed="0" reg_position="2"
  *               reg_status="4" reg_alarm="5" reg_servo_on="6" reg_fault_reset="7"/>
  *       <power settle_ms="20"/>                relay settle time, 0..50
- *       <battery source="fixed" mv="24000"/>   source: fixed | iio (path, scale)
+ *       <battery source="fixed" mv="24000"/>   source: fixed | iio (path, scale) | modbus
+ *       <battery source="modbus" bus="0" unit="10" reg="512" reg_type="input" width="16"
+ *                scale="10" period_ms="200"/>
  *       <line function="estop" chip="gpiochip0" line="3" active_low="true"/>
  *       <joystick device="/dev/input/event3" x="ABS_Y" x_invert="true"
  *                 rotation="ABS_X" rotation_invert="true" x_scale="1.0"/>
@@ -28,6 +34,22 @@
  * modbus drive: Modbus RTU over libmodbus, one thread per bus (hal/linux/
  * modbus_drive.h for the register semantics). Every reg_* is required;
  * addresses 0..65535, holding registers.
+ *
+ * modbus battery: bus (a <modbus> element, which still needs its reg_*),
+ * unit, reg required; reg_type holding (default) | input; width 16
+ * (default, unsigned) | 32 (unsigned, high word first); scale mV per count
+ * (default 1); period_ms 10..1000 (default 200). Failure handling in
+ * modbus_drive.h.
+ *
+ * cia402 drive: CANopen CiA 402 over SocketCAN, profile velocity mode
+ * (hal/linux/cia402.h). <canopen>: interface (required), heartbeat_ms the
+ * drives' heartbeat period 1..10000 (default 100), heartbeat_timeout_ms
+ * above heartbeat_ms, up to 60000 (default 300), sdo_timeout_ms 1..10000
+ * (100), boot_timeout_ms 1..60000 (2000), master_node 1..127 (optional: the
+ * vehicle computer then sends its heartbeat on 0x700+master_node and each
+ * drive stops itself when it misses it for heartbeat_timeout_ms),
+ * profile_accel counts/s^2 (optional, written to 0x6083 and 0x6084). node
+ * 1..127, unique on its bus and not the master_node.
  *
  * joystick: an evdev device (libevdev). x, y, rotation name the absolute
  * axes (ABS_*; y may be omitted); each axis's range maps to +-32767 (full
@@ -49,8 +71,9 @@
 #include "../../firmware/config.h"
 #include "../config_xml.h"
 
-enum { BK_DRIVE_LOOPBACK = 0, BK_DRIVE_MODBUS = 1 };
-#define BK_MODBUS_BUSES 2
+enum { BK_DRIVE_LOOPBACK = 0, BK_DRIVE_MODBUS = 1, BK_DRIVE_CIA402 = 2 };
+#define BK_MODBUS_BUSES	 2
+#define BK_CANOPEN_BUSES 2 /* as many as Modbus buses: one drive.bus range */
 
 enum {
 	BK_REG_TARGET_SPEED = 0, /* int32, 2 registers, high word first: counts/s */
@@ -72,7 +95,30 @@ typedef struct {
 	uint32_t retries;    /* further attempts after the first */
 	uint32_t reg[BK_REG_COUNT];
 } bk_modbus_bus_t;
-enum { BK_BATTERY_FIXED = 0, BK_BATTERY_IIO = 1 };
+
+typedef struct {
+	bool used;
+	char interface[16];	       /* IFNAMSIZ */
+	uint32_t heartbeat_ms;	       /* drives' heartbeat producer time (0x1017) */
+	uint32_t heartbeat_timeout_ms; /* no heartbeat this long: the drive is lost */
+	uint32_t sdo_timeout_ms;       /* per SDO request (start-up, configuration) */
+	uint32_t boot_timeout_ms;      /* boot-up after reset communication */
+	uint32_t master_node;	       /* 0: no master heartbeat */
+	uint32_t profile_accel;	       /* 0: not written */
+} bk_canopen_bus_t;
+
+enum { BK_BATTERY_FIXED = 0, BK_BATTERY_IIO = 1, BK_BATTERY_MODBUS = 2 };
+
+/* Battery voltage from a register of a unit on a Modbus bus (a drive's unit
+ * or a BMS of its own), read by that bus's thread every period_ms. */
+typedef struct {
+	uint8_t bus;
+	uint8_t unit;	    /* 1..247 */
+	uint16_t reg;	    /* address 0..65535 */
+	bool input;	    /* input register (function 04); else holding (03) */
+	uint8_t words;	    /* 1: uint16; 2: uint32 in two registers, high word first */
+	uint32_t period_ms; /* 10..1000, default 200 */
+} bk_battery_modbus_t;
 
 enum {
 	BK_LINE_CONTACT = 0,
@@ -102,14 +148,17 @@ typedef struct {
 
 typedef struct {
 	uint8_t drive_type[VS_MAX_AXES];
-	uint8_t drive_bus[VS_MAX_AXES];  /* modbus: bus index */
+	uint8_t drive_bus[VS_MAX_AXES];	 /* modbus, cia402: bus index */
 	uint8_t drive_unit[VS_MAX_AXES]; /* modbus: unit id 1..247 */
+	uint8_t drive_node[VS_MAX_AXES]; /* cia402: node id 1..127 */
 	bk_modbus_bus_t bus[BK_MODBUS_BUSES];
+	bk_canopen_bus_t canopen[BK_CANOPEN_BUSES];
 	uint32_t settle_ms;
 	uint8_t battery_source;
 	uint32_t battery_mv;        /* fixed */
 	char battery_path[256];     /* iio: a sysfs *_raw file */
-	double battery_scale;       /* iio: mV per raw count */
+	double battery_scale;       /* iio, modbus: mV per raw count */
+	bk_battery_modbus_t battery_mb;
 	bk_line_t lines[BK_LINE_COUNT];
 	bk_joystick_t joystick;
 } backend_cfg_t;

@@ -7,7 +7,43 @@
 #include <string.h>
 #include <unistd.h>
 
-#define RETRY_US 1000000u
+#define RETRY_US     1000000u
+#define CLOSER_STACK ((size_t)64 * 1024)
+
+static void *closer_main(void *arg)
+{
+	ljoy_t *j = arg;
+	int fd;
+	/* Ends when ljoy_close closes the write end. */
+	while (read(j->close_pipe[0], &fd, sizeof(fd)) == (ssize_t)sizeof(fd))
+		close(fd);
+	return NULL;
+}
+
+static void start_closer(ljoy_t *j)
+{
+	if (pipe2(j->close_pipe, O_CLOEXEC) != 0)
+		return;
+	/* The tick never waits on the pipe (64 KiB: 16384 descriptors). */
+	fcntl(j->close_pipe[1], F_SETFL, O_NONBLOCK);
+	pthread_attr_t a;
+	pthread_attr_init(&a);
+	pthread_attr_setstacksize(&a, CLOSER_STACK);
+	j->closer = pthread_create(&j->closer_th, &a, closer_main, j) == 0;
+	pthread_attr_destroy(&a);
+	if (!j->closer) {
+		close(j->close_pipe[0]);
+		close(j->close_pipe[1]);
+	}
+}
+
+/* From the tick: the closer thread closes fd. Without it (it could not be
+ * started), the close happens here. */
+static void close_later(ljoy_t *j, int fd)
+{
+	if (!j->closer || write(j->close_pipe[1], &fd, sizeof(fd)) != (ssize_t)sizeof(fd))
+		close(fd);
+}
 
 static void try_open(ljoy_t *j)
 {
@@ -16,7 +52,7 @@ static void try_open(ljoy_t *j)
 		return;
 	struct libevdev *dev = NULL;
 	if (libevdev_new_from_fd(fd, &dev) < 0) {
-		close(fd);
+		close_later(j, fd);
 		return;
 	}
 	for (int i = 0; i < 3; i++) {
@@ -25,7 +61,7 @@ static void try_open(ljoy_t *j)
 		const struct input_absinfo *ai = libevdev_get_abs_info(dev, (unsigned)j->cfg.code[i]);
 		if (!ai || ai->maximum <= ai->minimum) {
 			libevdev_free(dev);
-			close(fd);
+			close_later(j, fd);
 			return; /* not the device we were told about */
 		}
 		j->min[i] = ai->minimum;
@@ -43,8 +79,22 @@ void ljoy_init(ljoy_t *j, const bk_joystick_t *cfg, uint32_t now_us)
 	j->cfg = *cfg;
 	j->fd = -1;
 	j->next_try_us = now_us + RETRY_US;
-	if (cfg->used)
+	if (cfg->used) {
+		start_closer(j);
 		try_open(j);
+	}
+}
+
+/* The device is gone: absent from now on, its descriptor closed later. */
+static void drop(ljoy_t *j)
+{
+	if (j->dev)
+		libevdev_free(j->dev);
+	if (j->fd >= 0)
+		close_later(j, j->fd);
+	j->dev = NULL;
+	j->fd = -1;
+	j->present = false;
 }
 
 void ljoy_close(ljoy_t *j)
@@ -56,6 +106,12 @@ void ljoy_close(ljoy_t *j)
 	j->dev = NULL;
 	j->fd = -1;
 	j->present = false;
+	if (j->closer) {
+		close(j->close_pipe[1]); /* the thread closes what is queued, then ends */
+		pthread_join(j->closer_th, NULL);
+		close(j->close_pipe[0]);
+		j->closer = false;
+	}
 }
 
 static void take(ljoy_t *j, const struct input_event *ev)
@@ -93,7 +149,7 @@ void ljoy_poll(ljoy_t *j, uint32_t now_us)
 		} else if (r == -EAGAIN) {
 			return;
 		} else {
-			ljoy_close(j); /* ENODEV: unplugged */
+			drop(j); /* ENODEV: unplugged */
 			j->losses++;
 			j->next_try_us = now_us + RETRY_US;
 			return;

@@ -45,7 +45,8 @@ int lhal_open(lhal_t *h, const backend_cfg_t *bk, const hal_io_map_t *io, uint8_
 	if (lgpio_open(&h->gpio, bk, io, err, errlen) < 0)
 		return -1;
 	for (unsigned n = 0; n < BK_MODBUS_BUSES; n++) {
-		bool needed = false;
+		bool battery = bk->battery_source == BK_BATTERY_MODBUS && bk->battery_mb.bus == n;
+		bool needed = battery;
 		for (uint8_t i = 0; i < naxes; i++)
 			needed = needed || (bk->drive_type[i] == BK_DRIVE_MODBUS && bk->drive_bus[i] == n);
 		if (!needed)
@@ -55,9 +56,28 @@ int lhal_open(lhal_t *h, const backend_cfg_t *bk, const hal_io_map_t *io, uint8_
 		for (uint8_t i = 0; i < naxes; i++)
 			if (bk->drive_type[i] == BK_DRIVE_MODBUS && bk->drive_bus[i] == n)
 				h->mb_index[i] = (uint8_t)mb_bus_add(&h->bus[n], bk->drive_unit[i]);
+		if (battery)
+			mb_bus_add_battery(&h->bus[n], &bk->battery_mb, bk->battery_scale);
 		/* Started before the caller turns to SCHED_FIFO: the bus threads
 		 * stay normal threads, below the tick. */
 		if (mb_bus_start(&h->bus[n], err, errlen) < 0)
+			goto fail;
+	}
+	for (unsigned n = 0; n < BK_CANOPEN_BUSES; n++) {
+		bool needed = false;
+		for (uint8_t i = 0; i < naxes; i++)
+			needed = needed ||
+				 (bk->drive_type[i] == BK_DRIVE_CIA402 && bk->drive_bus[i] == n);
+		if (!needed)
+			continue;
+		co_bus_init(&h->can[n], n, &bk->canopen[n]);
+		for (uint8_t i = 0; i < naxes; i++)
+			if (bk->drive_type[i] == BK_DRIVE_CIA402 && bk->drive_bus[i] == n)
+				h->co_index[i] =
+				    (uint8_t)co_bus_add(&h->can[n], i, bk->drive_node[i]);
+		/* SDO configuration blocks here, before the control loop. */
+		if (co_bus_open(&h->can[n], err, errlen) < 0 ||
+		    co_bus_start(&h->can[n], err, errlen) < 0)
 			goto fail;
 	}
 	ljoy_init(&h->joy, &bk->joystick, 0);
@@ -66,6 +86,13 @@ int lhal_open(lhal_t *h, const backend_cfg_t *bk, const hal_io_map_t *io, uint8_
 	    !read_iio(bk->battery_path, bk->battery_scale, &h->battery_mv)) {
 		snprintf(err, errlen, "battery: %s: cannot read", bk->battery_path);
 		goto fail;
+	}
+	if (bk->battery_source == BK_BATTERY_MODBUS) {
+		/* The firmware samples the battery at init: give it a reading
+		 * (or, after the stale bound, the 0 V of a silent battery). */
+		mb_bus_t *b = &h->bus[bk->battery_mb.bus];
+		mb_battery_wait_first(b);
+		h->battery_mv = mb_battery_mv(b, &h->battery_errors);
 	}
 	return 0;
 fail:
@@ -77,6 +104,8 @@ void lhal_close(lhal_t *h)
 {
 	for (unsigned n = 0; n < BK_MODBUS_BUSES; n++)
 		mb_bus_close(&h->bus[n]);
+	for (unsigned n = 0; n < BK_CANOPEN_BUSES; n++)
+		co_bus_close(&h->can[n]);
 	ljoy_close(&h->joy);
 	lgpio_close(&h->gpio);
 }
@@ -84,6 +113,11 @@ void lhal_close(lhal_t *h)
 static mb_bus_t *mb_of(lhal_t *h, uint8_t axis)
 {
 	return h->bk.drive_type[axis] == BK_DRIVE_MODBUS ? &h->bus[h->bk.drive_bus[axis]] : NULL;
+}
+
+static co_bus_t *co_of(lhal_t *h, uint8_t axis)
+{
+	return h->bk.drive_type[axis] == BK_DRIVE_CIA402 ? &h->can[h->bk.drive_bus[axis]] : NULL;
 }
 
 void lhal_pre_tick(lhal_t *h, uint32_t now_us)
@@ -101,12 +135,16 @@ void lhal_pre_tick(lhal_t *h, uint32_t now_us)
 		d->rem -= whole * Q8_US;
 		d->pos = (int32_t)((uint32_t)d->pos + (uint32_t)whole);
 	}
+	for (unsigned n = 0; n < BK_CANOPEN_BUSES; n++)
+		co_bus_pre_tick(&h->can[n], now_us);
 	ljoy_poll(&h->joy, now_us);
 	if (h->bk.battery_source == BK_BATTERY_IIO && (int32_t)(now_us - h->battery_due_us) >= 0) {
 		h->battery_due_us = now_us + BATTERY_PERIOD_US;
 		if (!read_iio(h->bk.battery_path, h->bk.battery_scale, &h->battery_mv))
 			h->battery_errors++; /* keep the last good value */
 	}
+	if (h->bk.battery_source == BK_BATTERY_MODBUS)
+		h->battery_mv = mb_battery_mv(&h->bus[h->bk.battery_mb.bus], &h->battery_errors);
 }
 
 static void op_drive_set_velocity(void *ctx, uint8_t axis, int32_t cps_q8)
@@ -115,8 +153,11 @@ static void op_drive_set_velocity(void *ctx, uint8_t axis, int32_t cps_q8)
 	if (axis >= h->naxes)
 		return;
 	mb_bus_t *b = mb_of(h, axis);
+	co_bus_t *cb = co_of(h, axis);
 	if (b)
 		mb_drive_set_velocity(b, h->mb_index[axis], cps_q8);
+	else if (cb)
+		co_drive_set_velocity(cb, h->co_index[axis], cps_q8);
 	else
 		h->loop[axis].vel_q8 = cps_q8;
 }
@@ -130,6 +171,9 @@ static void op_drive_enable(void *ctx, uint8_t axis, bool on)
 	mb_bus_t *b = mb_of(h, axis);
 	if (b)
 		mb_drive_enable(b, h->mb_index[axis], on);
+	co_bus_t *cb = co_of(h, axis);
+	if (cb)
+		co_drive_enable(cb, h->co_index[axis], on);
 	h->loop[axis].enabled = on;
 	if (!on)
 		h->loop[axis].vel_q8 = 0;
@@ -146,6 +190,11 @@ static void op_drive_read(void *ctx, uint8_t axis, hal_drive_state_t *st)
 		mb_drive_read(b, h->mb_index[axis], st);
 		return;
 	}
+	co_bus_t *cb = co_of(h, axis);
+	if (cb) {
+		co_drive_read(cb, h->co_index[axis], st);
+		return;
+	}
 	st->position_counts = h->loop[axis].pos;
 	st->enabled = h->loop[axis].enabled;
 	st->fresh = true;
@@ -157,6 +206,9 @@ static void op_drive_reset_fault(void *ctx, uint8_t axis)
 	mb_bus_t *b = axis < h->naxes ? mb_of(h, axis) : NULL;
 	if (b)
 		mb_drive_reset_fault(b, h->mb_index[axis]);
+	co_bus_t *cb = axis < h->naxes ? co_of(h, axis) : NULL;
+	if (cb)
+		co_drive_reset_fault(cb, h->co_index[axis]);
 	/* a loopback drive has no faults */
 }
 

@@ -2,8 +2,10 @@
  * battery source, composed into one vs_hal_ops_t table.
  *
  * lhal_pre_tick() runs once per control period before vehicle_tick(): it
- * advances the software drives and refreshes slow sources (the IIO battery
- * channel every 200 ms), so that the ops themselves stay constant-time.
+ * advances the software drives, exchanges the CANopen frames of the cia402
+ * drives (cia402.h) and refreshes slow sources (the IIO battery channel
+ * every 200 ms; the latest value of a Modbus battery, read by its bus
+ * thread), so that the ops themselves stay constant-time.
  */
 #ifndef HAL_LINUX_LHAL_H
 #define HAL_LINUX_LHAL_H
@@ -13,6 +15,7 @@
 
 #include "../hal.h"
 #include "backend_cfg.h"
+#include "cia402.h"
 #include "gpio.h"
 #include "joystick.h"
 #include "modbus_drive.h"
@@ -31,10 +34,12 @@ typedef struct {
 	lhal_loop_drive_t loop[VS_MAX_AXES];
 	mb_bus_t bus[BK_MODBUS_BUSES];
 	uint8_t mb_index[VS_MAX_AXES]; /* modbus axis: its drive index on the bus */
+	co_bus_t can[BK_CANOPEN_BUSES];
+	uint8_t co_index[VS_MAX_AXES]; /* cia402 axis: its drive index on the bus */
 	ljoy_t joy;
 	bool relay_cmd;
 	uint32_t battery_mv;
-	uint32_t battery_errors;
+	uint32_t battery_errors; /* failed reads (iio, modbus) */
 	uint32_t now_us, last_us, battery_due_us;
 	bool have_now;
 } lhal_t;

@@ -7,6 +7,8 @@
 #include <string.h>
 #include <time.h>
 
+#include "rt.h"
+
 #define CYCLE_PAUSE_NS 1000000L /* between cycles: leaves the line idle briefly */
 #define BLOCK_MAX 8
 #define PROBE_US 200000u
@@ -51,16 +53,19 @@ unsigned mb_bus_add(mb_bus_t *b, uint8_t unit)
 	return b->nd++;
 }
 
+enum { RD_HOLDING, RD_INPUT, WR };
+
 /* One request with retries; false when every attempt failed. */
-static bool xfer_n(mb_bus_t *b, uint8_t unit, bool write, int addr, int n, uint16_t *regs,
+static bool xfer_n(mb_bus_t *b, uint8_t unit, int op, int addr, int n, uint16_t *regs,
 		   uint32_t retries)
 {
 	modbus_t *m = b->ctx;
 	modbus_set_slave(m, unit);
 	for (uint32_t attempt = 0; attempt <= retries; attempt++) {
-		int r = write ? (n == 1 ? modbus_write_register(m, addr, regs[0])
-					: modbus_write_registers(m, addr, n, regs))
-			      : modbus_read_registers(m, addr, n, regs);
+		int r = op == WR	 ? (n == 1 ? modbus_write_register(m, addr, regs[0])
+						   : modbus_write_registers(m, addr, n, regs))
+			: op == RD_INPUT ? modbus_read_input_registers(m, addr, n, regs)
+					 : modbus_read_registers(m, addr, n, regs);
 		pthread_mutex_lock(&b->mu);
 		b->requests++;
 		if (attempt)
@@ -75,9 +80,9 @@ static bool xfer_n(mb_bus_t *b, uint8_t unit, bool write, int addr, int n, uint1
 	return false;
 }
 
-static bool xfer(mb_bus_t *b, uint8_t unit, bool write, int addr, int n, uint16_t *regs)
+static bool xfer(mb_bus_t *b, uint8_t unit, int op, int addr, int n, uint16_t *regs)
 {
-	return xfer_n(b, unit, write, addr, n, regs, b->cur_retries);
+	return xfer_n(b, unit, op, addr, n, regs, b->cur_retries);
 }
 
 static void cycle_drive(mb_bus_t *b, mb_drive_t *d)
@@ -99,16 +104,16 @@ static void cycle_drive(mb_bus_t *b, mb_drive_t *d)
 
 	if (reset != d->reset_done) {
 		uint16_t one = 1;
-		if (xfer(b, d->unit, true, (int)reg[BK_REG_FAULT_RESET], 1, &one))
+		if (xfer(b, d->unit, WR, (int)reg[BK_REG_FAULT_RESET], 1, &one))
 			d->reset_done = reset;
 	}
 	if (!d->enable_sent_ok || d->enable_sent != en) {
 		uint16_t v = en ? 1 : 0;
 		d->enable_sent = en;
-		d->enable_sent_ok = xfer(b, d->unit, true, (int)reg[BK_REG_SERVO_ON], 1, &v);
+		d->enable_sent_ok = xfer(b, d->unit, WR, (int)reg[BK_REG_SERVO_ON], 1, &v);
 	}
 	uint16_t sp[2] = {(uint16_t)((uint32_t)cps >> 16), (uint16_t)((uint32_t)cps & 0xffffu)};
-	bool ok = xfer(b, d->unit, true, (int)reg[BK_REG_TARGET_SPEED], 2, sp);
+	bool ok = xfer(b, d->unit, WR, (int)reg[BK_REG_TARGET_SPEED], 2, sp);
 
 	uint32_t lo = reg[BK_REG_POSITION], hi = reg[BK_REG_POSITION] + 1;
 	for (int r = BK_REG_STATUS; r <= BK_REG_ALARM; r++) {
@@ -118,15 +123,15 @@ static void cycle_drive(mb_bus_t *b, mb_drive_t *d)
 	uint16_t pos[2] = {0, 0}, st = 0, al = 0;
 	if (ok && hi - lo < BLOCK_MAX) {
 		uint16_t blk[BLOCK_MAX];
-		ok = xfer(b, d->unit, false, (int)lo, (int)(hi - lo + 1), blk);
+		ok = xfer(b, d->unit, RD_HOLDING, (int)lo, (int)(hi - lo + 1), blk);
 		pos[0] = blk[reg[BK_REG_POSITION] - lo];
 		pos[1] = blk[reg[BK_REG_POSITION] + 1 - lo];
 		st = blk[reg[BK_REG_STATUS] - lo];
 		al = blk[reg[BK_REG_ALARM] - lo];
 	} else if (ok) {
-		ok = xfer(b, d->unit, false, (int)reg[BK_REG_POSITION], 2, pos) &&
-		     xfer(b, d->unit, false, (int)reg[BK_REG_STATUS], 1, &st) &&
-		     xfer(b, d->unit, false, (int)reg[BK_REG_ALARM], 1, &al);
+		ok = xfer(b, d->unit, RD_HOLDING, (int)reg[BK_REG_POSITION], 2, pos) &&
+		     xfer(b, d->unit, RD_HOLDING, (int)reg[BK_REG_STATUS], 1, &st) &&
+		     xfer(b, d->unit, RD_HOLDING, (int)reg[BK_REG_ALARM], 1, &al);
 	}
 	pthread_mutex_lock(&b->mu);
 	if (ok) {
@@ -143,20 +148,84 @@ static void cycle_drive(mb_bus_t *b, mb_drive_t *d)
 	pthread_mutex_unlock(&b->mu);
 }
 
+static void publish_battery(mb_bus_t *b, bool ok, uint32_t mv)
+{
+	mb_battery_t *t = &b->bat;
+	pthread_mutex_lock(&b->mu);
+	if (ok) {
+		t->mv = mv;
+		t->settled = true;
+	} else {
+		t->errors++;
+	}
+	pthread_mutex_unlock(&b->mu);
+}
+
+static void cycle_battery(mb_bus_t *b)
+{
+	mb_battery_t *t = &b->bat;
+	uint64_t now = mono_us();
+	if (now >= t->due_us) {
+		/* From now, not from the due time: a slow bus never bursts. */
+		t->due_us = now + (uint64_t)t->cfg.period_ms * 1000u;
+		b->cur_retries = t->failing ? 0 : b->cfg.retries;
+		uint16_t r[2] = {0, 0};
+		bool ok = xfer(b, t->cfg.unit, t->cfg.input ? RD_INPUT : RD_HOLDING, t->cfg.reg,
+			       t->cfg.words, r);
+		uint32_t raw = t->cfg.words == 2 ? ((uint32_t)r[0] << 16) | r[1] : r[0];
+		double v = (double)raw * t->scale + 0.5;
+		ok = ok && v < 4e9; /* beyond uint32 mV: a wrong register, not a voltage */
+		publish_battery(b, ok, ok ? (uint32_t)v : 0);
+		t->failing = !ok;
+		if (ok) {
+			t->good_us = now;
+			if (t->stale)
+				rt_log(LOG_INFO, "battery: unit %u on %s answers again: %u mV",
+				       t->cfg.unit, b->cfg.device, (uint32_t)v);
+			t->stale = false;
+		}
+	}
+	if (!t->stale && now - t->good_us > MB_BATTERY_STALE_MS * 1000ull) {
+		t->stale = true;
+		pthread_mutex_lock(&b->mu);
+		t->mv = 0;
+		t->settled = true;
+		pthread_mutex_unlock(&b->mu);
+		rt_log(LOG_WARNING,
+		       "battery: no reading from unit %u on %s for %u ms: it reads 0 V until "
+		       "it answers",
+		       t->cfg.unit, b->cfg.device, MB_BATTERY_STALE_MS);
+	}
+}
+
 static void *bus_thread(void *arg)
 {
 	mb_bus_t *b = arg;
 	while (!b->stop) {
 		for (unsigned i = 0; i < b->nd && !b->stop; i++)
 			cycle_drive(b, &b->d[i]);
+		if (b->bat.used && !b->stop)
+			cycle_battery(b);
 		struct timespec ts = {0, CYCLE_PAUSE_NS};
 		nanosleep(&ts, NULL);
 	}
 	return NULL;
 }
 
+void mb_bus_add_battery(mb_bus_t *b, const bk_battery_modbus_t *cfg, double scale_mv)
+{
+	memset(&b->bat, 0, sizeof(b->bat));
+	b->bat.used = true;
+	b->bat.cfg = *cfg;
+	b->bat.scale = scale_mv;
+}
+
 int mb_bus_start(mb_bus_t *b, char *err, size_t errlen)
 {
+	/* The stale bound counts from start: a battery that never answers
+	 * reads 0 V after it, like one that stopped answering. */
+	b->bat.good_us = mono_us();
+	b->bat.due_us = b->bat.good_us;
 	int r = pthread_create(&b->th, NULL, bus_thread, b);
 	if (r != 0) {
 		snprintf(err, errlen, "modbus: %s: thread: %s", b->cfg.device, strerror(r));
@@ -178,13 +247,35 @@ void mb_bus_close(mb_bus_t *b)
 	b->cur_retries = b->cfg.retries;
 	for (unsigned i = 0; i < b->nd; i++) {
 		uint16_t zero[2] = {0, 0};
-		xfer(b, b->d[i].unit, true, (int)b->cfg.reg[BK_REG_TARGET_SPEED], 2, zero);
-		xfer(b, b->d[i].unit, true, (int)b->cfg.reg[BK_REG_SERVO_ON], 1, zero);
+		xfer(b, b->d[i].unit, WR, (int)b->cfg.reg[BK_REG_TARGET_SPEED], 2, zero);
+		xfer(b, b->d[i].unit, WR, (int)b->cfg.reg[BK_REG_SERVO_ON], 1, zero);
 	}
 	modbus_close(b->ctx);
 	modbus_free(b->ctx);
 	b->ctx = NULL;
 	pthread_mutex_destroy(&b->mu);
+}
+
+void mb_battery_wait_first(mb_bus_t *b)
+{
+	for (unsigned ms = 0; ms <= MB_BATTERY_STALE_MS + 200u; ms += 10) {
+		pthread_mutex_lock(&b->mu);
+		bool settled = b->bat.settled;
+		pthread_mutex_unlock(&b->mu);
+		if (settled)
+			return;
+		struct timespec ts = {0, 10000000L};
+		nanosleep(&ts, NULL);
+	}
+}
+
+uint32_t mb_battery_mv(mb_bus_t *b, uint32_t *errors)
+{
+	pthread_mutex_lock(&b->mu);
+	uint32_t mv = b->bat.mv;
+	*errors = b->bat.errors;
+	pthread_mutex_unlock(&b->mu);
+	return mv;
 }
 
 void mb_drive_set_velocity(mb_bus_t *b, unsigned i, int32_t cps_q8)

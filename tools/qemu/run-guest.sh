@@ -3,11 +3,15 @@
 # with vcan0 up, the gpio test chip and uinput loaded. The guest console is
 # streamed to stdout; the exit status is the script's.
 #
-#   tools/qemu/run-guest.sh [-t SECONDS] [-m MODULE]... SCRIPT [FILE[=GUESTPATH]]...
+#   tools/qemu/run-guest.sh [-t SECONDS] [-m MODULE]... [-i] SCRIPT [FILE[=GUESTPATH]]...
 #
 #   -t SECONDS   host-side limit for the whole boot (default 120); the script
 #                itself gets SECONDS-30 inside the guest
 #   -m MODULE    extra kernel module to load (see mkinitramfs.sh)
+#   -i           guest clock from the instruction count (-icount shift=0,
+#                sleep=off): 1 ns per instruction, idle time skipped, so the
+#                host's load cannot make a guest timer late (for timing
+#                checks inside the guest, e.g. vehicle-fw's tick overrun)
 #   FILE         copied into the guest, see mkinitramfs.sh
 #
 # Exit status: the script's; 124 when a limit was hit; 125 when the guest
@@ -22,14 +26,16 @@ case $build in /*) ;; *) build=$top/$build ;; esac
 qdir=$build/qemu
 
 die() { printf 'run-guest: error: %s\n' "$*" >&2; exit 1; }
-usage() { sed -n '6,11s/^# \{0,1\}//p' "$0" >&2; exit 2; }
+usage() { sed -n '6,15s/^# \{0,1\}//p' "$0" >&2; exit 2; }
 
 limit=120
 mkargs=()
-while getopts "t:m:h" opt; do
+clock=()
+while getopts "t:m:ih" opt; do
 	case $opt in
 	t) limit=$OPTARG ;;
 	m) mkargs+=(-m "$OPTARG") ;;
+	i) clock=(-icount shift=0,sleep=off) ;;
 	*) usage ;;
 	esac
 done
@@ -65,7 +71,7 @@ set +e
 # -nodefaults: no VGA, NIC or option ROMs to set up; the serial port is the
 # console. stdin is closed so a run never waits on, or alters, a terminal.
 timeout -k 5 "$limit" qemu-system-x86_64 \
-	-accel tcg -cpu max -m 512 -smp 1 -nodefaults -no-user-config -no-reboot \
+	-accel tcg "${clock[@]}" -cpu max -m 512 -smp 1 -nodefaults -no-user-config -no-reboot \
 	-display none -serial stdio -monitor none \
 	-kernel "$kernel" -initrd "$img" \
 	-append "console=ttyS0 quiet panic=-1 oops=panic" </dev/null 2>&1 |

@@ -2,7 +2,11 @@
 """Independent check of mbdrive-sim's register map with pymodbus (Debian's
 python3-pymodbus), the client side of the bus that vehicle-fw uses.
 
-    mb_crosscheck.py PORT SIM_PID
+    mb_crosscheck.py PORT SIM_PID [BATTERY_UNIT BATTERY_MV]
+
+With a battery (mbdrive-sim --battery), also its registers: the voltage in
+10 mV counts at input register 0x200 and holding register 0x108, in mV as
+uint32 (high word first) at input registers 0x201-0x202.
 
 Prints one "crosscheck: FAIL: ..." line and exits 1 on the first mismatch,
 "crosscheck: PASS" at the end.
@@ -15,6 +19,7 @@ import time
 from pymodbus.client import ModbusSerialClient
 
 BASE = 0x100
+BAT_INPUT, BAT_HOLDING = 0x200, 0x108
 SPEED, POS, STATUS, ALARM, SERVO, RESET = 0, 2, 4, 5, 6, 7
 
 
@@ -91,6 +96,19 @@ def main():
     write(1, SPEED, [0, 0])
     write(1, SERVO, [0])
     expect("unit 1 status with servo off", regs(1)[STATUS], 0)
+
+    if len(sys.argv) > 4:
+        unit, mv = int(sys.argv[3]), int(sys.argv[4])
+        r = c.read_input_registers(BAT_INPUT, 3, slave=unit)
+        if r.isError():
+            fail("unit %d: read input registers: %s" % (unit, r))
+        expect("battery input 0x200 (10 mV)", r.registers[0], mv // 10)
+        expect("battery input 0x201-0x202 (mV)", (r.registers[1] << 16) | r.registers[2], mv)
+        expect("battery input high word", r.registers[1], mv >> 16)
+        r = c.read_holding_registers(BAT_HOLDING, 1, slave=unit)
+        if r.isError():
+            fail("unit %d: read holding 0x108: %s" % (unit, r))
+        expect("battery holding 0x108 (10 mV)", r.registers[0], mv // 10)
     c.close()
     print("crosscheck: PASS")
 
