@@ -120,9 +120,7 @@ static int fail(ctx_t *c, unsigned long line, const char *fmt, ...)
 	return -1;
 }
 
-/* Strict decimal number: optional sign, digits, fraction, exponent. Returns
- * 0 or writes the complaint. */
-static int parse_number(const char *s, double *out, const char **why)
+int config_parse_number(const char *s, double *out, const char **why)
 {
 	const char *q = s;
 	if (*q == '+' || *q == '-')
@@ -156,7 +154,7 @@ static int parse_number(const char *s, double *out, const char **why)
 	return 0;
 }
 
-static int parse_bool(const char *s, bool *out)
+int config_parse_bool(const char *s, bool *out)
 {
 	if (!strcmp(s, "true") || !strcmp(s, "1")) {
 		*out = true;
@@ -177,7 +175,7 @@ static int parse_ranged(ctx_t *c, const char *elem, const char *attr, const char
 	unsigned long line = cur_line(c);
 	const char *why;
 	double d;
-	if (parse_number(val, &d, &why) < 0) {
+	if (config_parse_number(val, &d, &why) < 0) {
 		fail(c, line, "%s.%s: %s '%s'", elem, attr, why, val);
 		return -1;
 	}
@@ -213,7 +211,7 @@ static int set_field(ctx_t *c, size_t i, const char *val)
 		break;
 	case T_BOOL: {
 		bool b;
-		if (parse_bool(val, &b) < 0)
+		if (config_parse_bool(val, &b) < 0)
 			return fail(c, line, "%s.%s: not a boolean '%s'", f->elem, f->attr, val);
 		*(bool *)(void *)base = b;
 		break;
@@ -284,7 +282,7 @@ static int io_entry(ctx_t *c, const char *elem, const XML_Char **atts)
 		const char *k = atts[a], *v = atts[a + 1];
 		if (!strcmp(k, "id")) {
 			const char *why;
-			if (parse_number(v, &d, &why) == 0 && d == 0)
+			if (config_parse_number(v, &d, &why) == 0 && d == 0)
 				return fail(c, line, "%s.id: id 0 is reserved for the unit", elem);
 			if (parse_ranged(c, elem, k, v, 1, 4294967295.0, false, true, &d) < 0)
 				return -1;
@@ -309,7 +307,7 @@ static int io_entry(ctx_t *c, const char *elem, const XML_Char **atts)
 			m.line = (uint32_t)d;
 			have_line = true;
 		} else if (!strcmp(k, "active_low")) {
-			if (parse_bool(v, &m.active_low) < 0)
+			if (config_parse_bool(v, &m.active_low) < 0)
 				return fail(c, line, "%s.active_low: not a boolean '%s'", elem, v);
 		} else {
 			return fail(c, line, "%s.%s: unknown attribute", elem, k);

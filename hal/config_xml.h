@@ -67,6 +67,13 @@ typedef struct {
 	hal_io_line_t e[VS_MAX_IO]; /* same order as vs_config_t.io */
 } hal_io_map_t;
 
+/* The loader's value syntax, for other parsers of the same files: a strict
+ * decimal number (optional sign, digits, fraction, exponent; no nan, inf,
+ * hex or blanks), -1 with why = "not a number" | "not finite" | "out of
+ * range"; a boolean true/false/1/0, -1 otherwise. */
+int config_parse_number(const char *s, double *out, const char **why);
+int config_parse_bool(const char *s, bool *out);
+
 /* Loads vehicle_path, then io_path (NULL: keep the default io table, empty
  * map). io_map may be NULL. On error returns -1, writes one line to err and
  * leaves *out and *io_map in an unspecified but valid state. */

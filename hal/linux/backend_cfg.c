@@ -4,7 +4,6 @@
 #include <errno.h>
 #include <expat.h>
 #include <libevdev/libevdev.h>
-#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -59,8 +58,8 @@ static int fail(bctx_t *c, const char *fmt, ...)
 		return -1;
 	c->failed = true;
 	unsigned long line = c->at_line ? c->at_line
-			   : c->p      ? (unsigned long)XML_GetCurrentLineNumber(c->p)
-				       : 0ul;
+			     : c->p	? (unsigned long)XML_GetCurrentLineNumber(c->p)
+					: 0ul;
 	int n = snprintf(c->err, c->errlen, "%s:%lu: ", c->path, line);
 	if (n >= 0 && (size_t)n < c->errlen) {
 		va_list ap;
@@ -92,12 +91,23 @@ static int get_uint(bctx_t *c, const char *el, const char *at, const char *v, un
 
 static int get_bool(bctx_t *c, const char *el, const char *at, const char *v, bool *out)
 {
-	if (!strcmp(v, "true") || !strcmp(v, "1"))
-		*out = true;
-	else if (!strcmp(v, "false") || !strcmp(v, "0"))
-		*out = false;
-	else
+	if (config_parse_bool(v, out) < 0)
 		return fail(c, "%s.%s: not a boolean '%s'", el, at, v);
+	return 0;
+}
+
+/* Number within [lo, hi] ((lo, hi] when lo_excl; range names it for the
+ * message), in the core loader's syntax. */
+static int get_double(bctx_t *c, const char *el, const char *at, const char *v, double lo,
+		      bool lo_excl, double hi, const char *range, double *out)
+{
+	double d;
+	const char *why;
+	if (config_parse_number(v, &d, &why) < 0)
+		return fail(c, "%s.%s: %s '%s'", el, at, why, v);
+	if ((lo_excl ? d <= lo : d < lo) || d > hi)
+		return fail(c, "%s.%s: out of range %s '%s'", el, at, range, v);
+	*out = d;
 	return 0;
 }
 
@@ -140,7 +150,8 @@ static int drive_elem(bctx_t *c, const XML_Char **a)
 		return fail(c, "drive.type: required");
 	if (type == BK_DRIVE_MODBUS) {
 		if (bus == UINT32_MAX || unit == UINT32_MAX)
-			return fail(c, "drive.%s: required for modbus", bus == UINT32_MAX ? "bus" : "unit");
+			return fail(c, "drive.%s: required for modbus",
+				    bus == UINT32_MAX ? "bus" : "unit");
 		c->b->drive_bus[axis] = (uint8_t)bus;
 		c->b->drive_unit[axis] = (uint8_t)unit;
 	} else if (type == BK_DRIVE_CIA402) {
@@ -162,14 +173,14 @@ static int drive_elem(bctx_t *c, const XML_Char **a)
 }
 
 static const char *const reg_names[BK_REG_COUNT] = {
-    "reg_target_speed", "reg_position", "reg_status", "reg_alarm", "reg_servo_on",
-    "reg_fault_reset",
+    "reg_target_speed", "reg_position", "reg_status",
+    "reg_alarm",	"reg_servo_on", "reg_fault_reset",
 };
 
 static int modbus_elem(bctx_t *c, const XML_Char **a)
 {
-	bk_modbus_bus_t m = {.baud = 115200, .parity = 'N', .stop_bits = 1, .timeout_ms = 20,
-			     .retries = 1};
+	bk_modbus_bus_t m = {
+	    .baud = 115200, .parity = 'N', .stop_bits = 1, .timeout_ms = 20, .retries = 1};
 	uint32_t bus = UINT32_MAX;
 	bool have_reg[BK_REG_COUNT] = {false};
 	for (; a[0]; a += 2) {
@@ -354,13 +365,9 @@ static int battery_elem(bctx_t *c, const XML_Char **a)
 				return fail(c, "battery.path: not an absolute path '%s'", a[1]);
 			snprintf(b->battery_path, sizeof(b->battery_path), "%s", a[1]);
 		} else if (!strcmp(a[0], "scale")) {
-			char *end;
-			double d = strtod(a[1], &end);
-			if (a[1][0] == '\0' || *end != '\0' || !isfinite(d))
-				return fail(c, "battery.scale: not a number '%s'", a[1]);
-			if (d <= 0.0 || d > 1e6)
-				return fail(c, "battery.scale: out of range (0, 1e6] '%s'", a[1]);
-			b->battery_scale = d;
+			if (get_double(c, "battery", "scale", a[1], 0.0, true, 1e6, "(0, 1e6]",
+				       &b->battery_scale))
+				return -1;
 		} else {
 			return fail(c, "battery.%s: unknown attribute", a[0]);
 		}
@@ -422,7 +429,8 @@ static int line_elem(bctx_t *c, const XML_Char **a)
 		return fail(c, "line.axis: only for servo_enable");
 	}
 	if (c->b->lines[fn].used)
-		return fail(c, "line.function: duplicate '%s'", line_names[fn < BK_LINE_SERVO0 ? fn : BK_LINE_SERVO0]);
+		return fail(c, "line.function: duplicate '%s'",
+			    line_names[fn < BK_LINE_SERVO0 ? fn : BK_LINE_SERVO0]);
 	l.used = true;
 	c->b->lines[fn] = l;
 	return 0;
@@ -447,7 +455,8 @@ static int joystick_elem(bctx_t *c, const XML_Char **a)
 			if (!strcmp(a[0], ax[i])) {
 				int code = libevdev_event_code_from_name(EV_ABS, a[1]);
 				if (code < 0)
-					return fail(c, "joystick.%s: not an ABS_ axis '%s'", a[0], a[1]);
+					return fail(c, "joystick.%s: not an ABS_ axis '%s'", a[0],
+						    a[1]);
 				j->code[i] = code;
 				hit = 1;
 			}
@@ -459,13 +468,9 @@ static int joystick_elem(bctx_t *c, const XML_Char **a)
 			}
 			snprintf(n, sizeof(n), "%s_scale", ax[i]);
 			if (!hit && !strcmp(a[0], n)) {
-				char *end;
-				double d = strtod(a[1], &end);
-				if (a[1][0] == '\0' || *end != '\0' || !isfinite(d))
-					return fail(c, "joystick.%s: not a number '%s'", n, a[1]);
-				if (d < 0.0 || d > 1.0)
-					return fail(c, "joystick.%s: out of range 0..1 '%s'", n, a[1]);
-				j->scale[i] = d;
+				if (get_double(c, "joystick", n, a[1], 0.0, false, 1.0, "0..1",
+					       &j->scale[i]))
+					return -1;
 				hit = 1;
 			}
 		}
