@@ -47,23 +47,35 @@ static bool take_status(can_ctx_t *k, const canlink_frame_t *f)
 	return true;
 }
 
+/* The next frame before timeout_ms after t0, counted: VC_OK, VC_E_TIMEOUT or
+ * VC_E_LINK. */
+static int next_frame(can_ctx_t *k, uint32_t t0, unsigned timeout_ms, canlink_frame_t *f)
+{
+	for (;;) {
+		uint32_t e = elapsed_ms(k, t0);
+		if (e >= timeout_ms)
+			return VC_E_TIMEOUT;
+		int r = k->bus.recv(k->bus.ctx, f, timeout_ms - e);
+		if (r < 0)
+			return VC_E_LINK;
+		if (r > 0) {
+			k->stats.frames_rx++;
+			k->c->stats.bytes_rx += f->dlc;
+			return VC_OK;
+		}
+	}
+}
+
 /* Waits for the response to (seq, opcode) until timeout_ms after t0.
  * VC_OK with the message in k->rx_buf[0..*len), VC_E_TIMEOUT, VC_E_LINK. */
 static int await_response(can_ctx_t *k, uint8_t opcode, uint32_t t0, unsigned timeout_ms,
 			  size_t *len)
 {
 	for (;;) {
-		uint32_t e = elapsed_ms(k, t0);
-		if (e >= timeout_ms)
-			return VC_E_TIMEOUT;
 		canlink_frame_t f;
-		int r = k->bus.recv(k->bus.ctx, &f, timeout_ms - e);
-		if (r < 0)
-			return VC_E_LINK;
-		if (r == 0)
-			continue;
-		k->stats.frames_rx++;
-		k->c->stats.bytes_rx += f.dlc;
+		int r = next_frame(k, t0, timeout_ms, &f);
+		if (r != VC_OK)
+			return r;
 		if (take_status(k, &f) || f.id != CANLINK_ID_RESPONSE + k->node)
 			continue;
 		int fr = canlink_rx_feed(&k->rx, &f, k->bus.now_ms(k->bus.ctx) * 1000u);
@@ -185,16 +197,10 @@ int vc_can_status(vc_client_t *c, canlink_status_t *st, unsigned timeout_ms)
 
 	k->st_fresh = false;
 	for (;;) {
-		uint32_t e = elapsed_ms(k, t0);
-		if (e >= timeout_ms)
-			return VC_E_TIMEOUT;
 		canlink_frame_t f;
-		int r = k->bus.recv(k->bus.ctx, &f, timeout_ms - e);
-		if (r < 0)
-			return VC_E_LINK;
-		if (r == 0)
-			continue;
-		k->stats.frames_rx++;
+		int r = next_frame(k, t0, timeout_ms, &f);
+		if (r != VC_OK)
+			return r;
 		take_status(k, &f);
 		if (k->st_fresh) {
 			*st = k->st_last;
