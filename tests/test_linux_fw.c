@@ -3,9 +3,7 @@
  * library, and SIGTERM mid-move. */
 #include <errno.h>
 #include <fcntl.h>
-#include <libgen.h>
 #include <poll.h>
-#include <pty.h>
 #include <setjmp.h>
 #include <signal.h>
 #include <stdarg.h>
@@ -14,11 +12,12 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/wait.h>
-#include <termios.h>
 #include <time.h>
 #include <unistd.h>
 
 #include <cmocka.h>
+
+#include "fw_rig.h"
 
 #include "../hal/config_xml.h"
 #include "../hal/linux/backend_cfg.h"
@@ -26,21 +25,9 @@
 #include <linux/input.h>
 #include "../proto/client.h"
 
-static char BUILD_DIR[512] = "build";
-static char DIR_[] = "/tmp/vsfwXXXXXX";
-static char VPATH[600], IOPATH[600], LOGPATH[600];
-
-static void write_file(const char *path, const char *text)
-{
-	FILE *f = fopen(path, "w");
-	assert_non_null(f);
-	assert_int_equal(fputs(text, f) >= 0, 1);
-	assert_int_equal(fclose(f), 0);
-}
-
-#define VEHICLE_HEAD                                                                            \
-	"<vehicle kinematics=\"differential\" tick_hz=\"100\">\n"                               \
-	"  <devices contact_sensor=\"false\" obstacle_input=\"false\" estop=\"false\"\n"        \
+#define VEHICLE_HEAD                                                                               \
+	"<vehicle kinematics=\"differential\" tick_hz=\"100\">\n"                                  \
+	"  <devices contact_sensor=\"false\" obstacle_input=\"false\" estop=\"false\"\n"           \
 	"           joystick=\"false\"/>\n"
 
 /* ---- <backends> ------------------------------------------------------ */
@@ -48,18 +35,19 @@ static void write_file(const char *path, const char *text)
 static void test_backends_parsed(void **state)
 {
 	(void)state;
-	write_file(VPATH, VEHICLE_HEAD
-		   "  <backends>\n"
-		   "    <drive axis=\"1\" type=\"loopback\"/>\n"
-		   "    <power settle_ms=\"35\"/>\n"
-		   "    <battery source=\"iio\" path=\"/sys/x/in_voltage0_raw\" scale=\"12.5\"/>\n"
-		   "    <line function=\"estop\" chip=\"gpiochip1\" line=\"3\" active_low=\"true\"/>\n"
-		   "    <line function=\"servo_enable\" axis=\"1\" chip=\"vs-testchip\" line=\"9\"/>\n"
-		   "  </backends>\n"
-		   "</vehicle>\n");
+	fw_write_file(
+	    FW_VPATH, VEHICLE_HEAD
+	    "  <backends>\n"
+	    "    <drive axis=\"1\" type=\"loopback\"/>\n"
+	    "    <power settle_ms=\"35\"/>\n"
+	    "    <battery source=\"iio\" path=\"/sys/x/in_voltage0_raw\" scale=\"12.5\"/>\n"
+	    "    <line function=\"estop\" chip=\"gpiochip1\" line=\"3\" active_low=\"true\"/>\n"
+	    "    <line function=\"servo_enable\" axis=\"1\" chip=\"vs-testchip\" line=\"9\"/>\n"
+	    "  </backends>\n"
+	    "</vehicle>\n");
 	backend_cfg_t b;
 	char err[256] = "";
-	assert_int_equal(backend_cfg_load(VPATH, &b, err, sizeof(err)), 0);
+	assert_int_equal(backend_cfg_load(FW_VPATH, &b, err, sizeof(err)), 0);
 	assert_int_equal(b.drive_type[1], BK_DRIVE_LOOPBACK);
 	assert_int_equal(b.settle_ms, 35);
 	assert_int_equal(b.battery_source, BK_BATTERY_IIO);
@@ -77,16 +65,17 @@ static void test_backends_parsed(void **state)
 	assert_false(b.bus[0].used);
 
 	/* A Modbus bus and its drive. */
-	write_file(VPATH, VEHICLE_HEAD
-		   "  <backends>\n"
-		   "    <modbus bus=\"1\" device=\"/dev/ttyUSB0\" baud=\"57600\" parity=\"E\"\n"
-		   "            stop_bits=\"2\" timeout_ms=\"25\" retries=\"3\" reg_target_speed=\"16\"\n"
-		   "            reg_position=\"18\" reg_status=\"20\" reg_alarm=\"21\"\n"
-		   "            reg_servo_on=\"40\" reg_fault_reset=\"41\"/>\n"
-		   "    <drive axis=\"0\" type=\"modbus\" bus=\"1\" unit=\"7\"/>\n"
-		   "  </backends>\n"
-		   "</vehicle>\n");
-	assert_int_equal(backend_cfg_load(VPATH, &b, err, sizeof(err)), 0);
+	fw_write_file(
+	    FW_VPATH, VEHICLE_HEAD
+	    "  <backends>\n"
+	    "    <modbus bus=\"1\" device=\"/dev/ttyUSB0\" baud=\"57600\" parity=\"E\"\n"
+	    "            stop_bits=\"2\" timeout_ms=\"25\" retries=\"3\" reg_target_speed=\"16\"\n"
+	    "            reg_position=\"18\" reg_status=\"20\" reg_alarm=\"21\"\n"
+	    "            reg_servo_on=\"40\" reg_fault_reset=\"41\"/>\n"
+	    "    <drive axis=\"0\" type=\"modbus\" bus=\"1\" unit=\"7\"/>\n"
+	    "  </backends>\n"
+	    "</vehicle>\n");
+	assert_int_equal(backend_cfg_load(FW_VPATH, &b, err, sizeof(err)), 0);
 	assert_int_equal(b.drive_type[0], BK_DRIVE_MODBUS);
 	assert_int_equal(b.drive_bus[0], 1);
 	assert_int_equal(b.drive_unit[0], 7);
@@ -119,8 +108,8 @@ static void test_backends_parsed(void **state)
 		 "             reg_type=\"input\" width=\"32\" scale=\"0.5\" period_ms=\"50\"/>\n"
 		 "%s  </backends>\n</vehicle>\n",
 		 mb_bus1);
-	write_file(VPATH, text);
-	assert_int_equal(backend_cfg_load(VPATH, &b, err, sizeof(err)), 0);
+	fw_write_file(FW_VPATH, text);
+	assert_int_equal(backend_cfg_load(FW_VPATH, &b, err, sizeof(err)), 0);
 	assert_int_equal(b.battery_source, BK_BATTERY_MODBUS);
 	assert_int_equal(b.battery_mb.bus, 1);
 	assert_int_equal(b.battery_mb.unit, 10);
@@ -134,8 +123,8 @@ static void test_backends_parsed(void **state)
 			      "    <battery source=\"modbus\" bus=\"1\" unit=\"3\" reg=\"264\"/>\n"
 			      "  </backends>\n</vehicle>\n",
 		 mb_bus1);
-	write_file(VPATH, text);
-	assert_int_equal(backend_cfg_load(VPATH, &b, err, sizeof(err)), 0);
+	fw_write_file(FW_VPATH, text);
+	assert_int_equal(backend_cfg_load(FW_VPATH, &b, err, sizeof(err)), 0);
 	assert_int_equal(b.battery_source, BK_BATTERY_MODBUS);
 	assert_int_equal(b.battery_mb.unit, 3);
 	assert_int_equal(b.battery_mb.reg, 264);
@@ -145,19 +134,19 @@ static void test_backends_parsed(void **state)
 	assert_int_equal(b.battery_mb.period_ms, 200);
 
 	/* CANopen buses and their CiA 402 drives: given and default attributes. */
-	write_file(VPATH,
-		   VEHICLE_HEAD "  <backends>\n"
-				"    <canopen bus=\"1\" interface=\"can1\" heartbeat_ms=\"50\"\n"
-				"             heartbeat_timeout_ms=\"175\" sdo_timeout_ms=\"30\"\n"
-				"             boot_timeout_ms=\"5000\" master_node=\"127\" "
-				"profile_accel=\"400000\"/>\n"
-				"    <canopen bus=\"0\" interface=\"vcan0\"/>\n"
-				"    <drive axis=\"0\" type=\"cia402\" bus=\"1\" node=\"3\"/>\n"
-				"    <drive axis=\"1\" type=\"cia402\" bus=\"0\" node=\"3\"/>\n"
-				"    <drive axis=\"2\" type=\"cia402\" bus=\"1\" node=\"126\"/>\n"
-				"  </backends>\n"
-				"</vehicle>\n");
-	assert_int_equal(backend_cfg_load(VPATH, &b, err, sizeof(err)), 0);
+	fw_write_file(FW_VPATH, VEHICLE_HEAD
+		      "  <backends>\n"
+		      "    <canopen bus=\"1\" interface=\"can1\" heartbeat_ms=\"50\"\n"
+		      "             heartbeat_timeout_ms=\"175\" sdo_timeout_ms=\"30\"\n"
+		      "             boot_timeout_ms=\"5000\" master_node=\"127\" "
+		      "profile_accel=\"400000\"/>\n"
+		      "    <canopen bus=\"0\" interface=\"vcan0\"/>\n"
+		      "    <drive axis=\"0\" type=\"cia402\" bus=\"1\" node=\"3\"/>\n"
+		      "    <drive axis=\"1\" type=\"cia402\" bus=\"0\" node=\"3\"/>\n"
+		      "    <drive axis=\"2\" type=\"cia402\" bus=\"1\" node=\"126\"/>\n"
+		      "  </backends>\n"
+		      "</vehicle>\n");
+	assert_int_equal(backend_cfg_load(FW_VPATH, &b, err, sizeof(err)), 0);
 	assert_int_equal(b.drive_type[0], BK_DRIVE_CIA402);
 	assert_int_equal(b.drive_bus[0], 1);
 	assert_int_equal(b.drive_node[0], 3);
@@ -186,7 +175,7 @@ static void test_backends_parsed(void **state)
 
 	/* The core loader skips the section and still reads the rest. */
 	vs_config_t cfg;
-	assert_int_equal(config_load(VPATH, NULL, &cfg, NULL, err, sizeof(err)), 0);
+	assert_int_equal(config_load(FW_VPATH, NULL, &cfg, NULL, err, sizeof(err)), 0);
 	assert_int_equal(cfg.tick_hz, 100);
 	assert_false(cfg.has_estop);
 }
@@ -194,10 +183,10 @@ static void test_backends_parsed(void **state)
 static void test_backends_defaults(void **state)
 {
 	(void)state;
-	write_file(VPATH, VEHICLE_HEAD "</vehicle>\n");
+	fw_write_file(FW_VPATH, VEHICLE_HEAD "</vehicle>\n");
 	backend_cfg_t b;
 	char err[256] = "";
-	assert_int_equal(backend_cfg_load(VPATH, &b, err, sizeof(err)), 0);
+	assert_int_equal(backend_cfg_load(FW_VPATH, &b, err, sizeof(err)), 0);
 	assert_int_equal(b.drive_type[0], BK_DRIVE_LOOPBACK);
 	assert_int_equal(b.settle_ms, 20);
 	assert_int_equal(b.battery_source, BK_BATTERY_FIXED);
@@ -223,7 +212,8 @@ static void test_backends_errors(void **state)
 	    {"<battery scale=\"0x10\"/>", "battery.scale: not a number '0x10'"},
 	    {"<battery scale=\"0\"/>", "battery.scale: out of range (0, 1e6] '0'"},
 	    {"<joystick x_scale=\" 0.5\"/>", "joystick.x_scale: not a number ' 0.5'"},
-	    {"<line function=\"horn\" chip=\"c\" line=\"1\"/>", "line.function: unknown function 'horn'"},
+	    {"<line function=\"horn\" chip=\"c\" line=\"1\"/>",
+	     "line.function: unknown function 'horn'"},
 	    {"<line function=\"estop\" line=\"1\"/>", "line.chip: required"},
 	    {"<line function=\"estop\" chip=\"c\" line=\"1\" active_low=\"yes\"/>",
 	     "line.active_low: not a boolean 'yes'"},
@@ -255,7 +245,8 @@ static void test_backends_errors(void **state)
 	    {"<modbus bus=\"0\" device=\"/dev/ttyUSB0\"/>", "modbus.reg_target_speed: required"},
 	    {"<modbus bus=\"0\" device=\"/dev/ttyUSB0\" parity=\"X\"/>",
 	     "modbus.parity: N, E or O 'X'"},
-	    {"<modbus bus=\"0\" device=\"ttyUSB0\"/>", "modbus.device: not a device path 'ttyUSB0'"},
+	    {"<modbus bus=\"0\" device=\"ttyUSB0\"/>",
+	     "modbus.device: not a device path 'ttyUSB0'"},
 	    {"<modbus bus=\"0\" device=\"/dev/ttyUSB0\" timeout_ms=\"0\"/>",
 	     "modbus.timeout_ms: out of range 1..1000 '0'"},
 	    {"<battery source=\"modbus\" unit=\"1\" reg=\"5\"/>",
@@ -332,20 +323,22 @@ static void test_backends_errors(void **state)
 	for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
 		char text[1024], want[1024], err[256] = "";
 		backend_cfg_t b;
-		snprintf(text, sizeof(text), VEHICLE_HEAD "  <backends>\n%s\n  </backends>\n</vehicle>\n",
+		snprintf(text, sizeof(text),
+			 VEHICLE_HEAD "  <backends>\n%s\n  </backends>\n</vehicle>\n",
 			 cases[i].body);
-		write_file(VPATH, text);
-		assert_int_equal(backend_cfg_load(VPATH, &b, err, sizeof(err)), -1);
-		snprintf(want, sizeof(want), "%s:5: %s", VPATH, cases[i].msg);
+		fw_write_file(FW_VPATH, text);
+		assert_int_equal(backend_cfg_load(FW_VPATH, &b, err, sizeof(err)), -1);
+		snprintf(want, sizeof(want), "%s:5: %s", FW_VPATH, cases[i].msg);
 		assert_string_equal(err, want);
 	}
 
 	/* A second section is the core loader's error. */
-	write_file(VPATH, VEHICLE_HEAD "<backends/>\n<backends/>\n</vehicle>\n");
+	fw_write_file(FW_VPATH, VEHICLE_HEAD "<backends/>\n<backends/>\n</vehicle>\n");
 	vs_config_t cfg;
 	char err[256], want[700];
-	assert_int_equal(config_load(VPATH, NULL, &cfg, NULL, err, sizeof(err)), -1);
-	snprintf(want, sizeof(want), "%s:5: backends: duplicate element (first at line 4)", VPATH);
+	assert_int_equal(config_load(FW_VPATH, NULL, &cfg, NULL, err, sizeof(err)), -1);
+	snprintf(want, sizeof(want), "%s:5: backends: duplicate element (first at line 4)",
+		 FW_VPATH);
 	assert_string_equal(err, want);
 }
 
@@ -354,15 +347,15 @@ static void test_backends_errors(void **state)
 static void test_joystick_cfg_and_scaling(void **state)
 {
 	(void)state;
-	write_file(VPATH, VEHICLE_HEAD
-		   "  <backends>\n"
-		   "    <joystick device=\"/dev/input/event7\" x=\"ABS_Y\" x_invert=\"true\"\n"
-		   "              rotation=\"ABS_RX\" rotation_scale=\"0.5\"/>\n"
-		   "  </backends>\n"
-		   "</vehicle>\n");
+	fw_write_file(FW_VPATH, VEHICLE_HEAD
+		      "  <backends>\n"
+		      "    <joystick device=\"/dev/input/event7\" x=\"ABS_Y\" x_invert=\"true\"\n"
+		      "              rotation=\"ABS_RX\" rotation_scale=\"0.5\"/>\n"
+		      "  </backends>\n"
+		      "</vehicle>\n");
 	backend_cfg_t b;
 	char err[256] = "";
-	assert_int_equal(backend_cfg_load(VPATH, &b, err, sizeof(err)), 0);
+	assert_int_equal(backend_cfg_load(FW_VPATH, &b, err, sizeof(err)), 0);
 	assert_true(b.joystick.used);
 	assert_string_equal(b.joystick.device, "/dev/input/event7");
 	assert_int_equal(b.joystick.code[0], ABS_Y);
@@ -411,9 +404,9 @@ static void test_example_config(void **state)
 	vs_config_t cfg;
 	hal_io_map_t io;
 	char err[512] = "";
-	assert_int_equal(config_load("config/vehicle-linux.xml", "config/io.xml", &cfg, &io, err,
-				     sizeof(err)),
-			 0);
+	assert_int_equal(
+	    config_load("config/vehicle-linux.xml", "config/io.xml", &cfg, &io, err, sizeof(err)),
+	    0);
 	assert_int_equal(backend_cfg_load("config/vehicle-linux.xml", &b, err, sizeof(err)), 0);
 	assert_int_equal(cfg.tick_hz, 1000);
 	assert_true(b.lines[BK_LINE_RELAY].used && b.lines[BK_LINE_RELAY_FB].used);
@@ -426,29 +419,27 @@ static void test_example_config(void **state)
 static pid_t FW_PID = -1;
 static int MASTER = -1;
 
+static void console(const char *line, char *reply, size_t cap)
+{
+	fw_console(MASTER, line, reply, cap, 2000);
+}
+
 static void start_fw(void)
 {
 	int slave;
 	char exe[600];
 
-	assert_int_equal(openpty(&MASTER, &slave, NULL, NULL, NULL), 0);
-	const char *path = ttyname(slave);
-	assert_non_null(path);
 	char port[256];
-	snprintf(port, sizeof(port), "%s", path);
-	struct termios t;
-	assert_int_equal(tcgetattr(MASTER, &t), 0);
-	cfmakeraw(&t);
-	assert_int_equal(tcsetattr(MASTER, TCSANOW, &t), 0);
+	MASTER = fw_open_port(&slave, port, sizeof(port));
 
-	snprintf(exe, sizeof(exe), "%s/vehicle-fw", BUILD_DIR);
+	snprintf(exe, sizeof(exe), "%s/vehicle-fw", FW_BUILD_DIR);
 	FW_PID = fork();
 	assert_true(FW_PID >= 0);
 	if (FW_PID == 0) {
-		int fd = open(LOGPATH, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+		int fd = open(FW_LOGPATH, O_WRONLY | O_CREAT | O_TRUNC, 0644);
 		dup2(fd, 2);
-		execl(exe, exe, "--config", VPATH, "--io", IOPATH, "--port", port, "--rt-priority",
-		      "0", (char *)NULL);
+		execl(exe, exe, "--config", FW_VPATH, "--io", FW_IOPATH, "--port", port,
+		      "--rt-priority", "0", (char *)NULL);
 		_exit(127);
 	}
 	close(slave); /* vehicle-fw opens the port by name */
@@ -464,49 +455,16 @@ static int stop_fw(void)
 	return WEXITSTATUS(status);
 }
 
-static void read_log(char *buf, size_t cap)
-{
-	FILE *f = fopen(LOGPATH, "r");
-	assert_non_null(f);
-	size_t n = fread(buf, 1, cap - 1, f);
-	buf[n] = '\0';
-	fclose(f);
-}
-
 /* One console line on the raw link; the reply line without its newline. */
-static void console(const char *line, char *reply, size_t cap)
-{
-	size_t n = 0;
-	assert_int_equal(write(MASTER, line, strlen(line)), (ssize_t)strlen(line));
-	assert_int_equal(write(MASTER, "\n", 1), 1);
-	while (n + 1 < cap) {
-		struct pollfd p = {.fd = MASTER, .events = POLLIN};
-		assert_int_equal(poll(&p, 1, 2000), 1);
-		assert_int_equal(read(MASTER, reply + n, 1), 1);
-		if (reply[n] == '\n')
-			break;
-		n++;
-	}
-	reply[n] = '\0';
-}
-
-static void sleep_ms(long ms)
-{
-	struct timespec ts = {ms / 1000, (ms % 1000) * 1000000L};
-	while (nanosleep(&ts, &ts) != 0 && errno == EINTR)
-		;
-}
-
 static void write_fw_config(void)
 {
-	write_file(VPATH, VEHICLE_HEAD
-		   "  <backends>\n"
-		   "    <drive axis=\"0\" type=\"loopback\"/>\n"
-		   "    <drive axis=\"1\" type=\"loopback\"/>\n"
-		   "    <battery source=\"fixed\" mv=\"23500\"/>\n"
-		   "  </backends>\n"
-		   "</vehicle>\n");
-	write_file(IOPATH, "<io>\n  <input id=\"1\" name=\"dock\"/>\n</io>\n");
+	fw_write_file(FW_VPATH, VEHICLE_HEAD "  <backends>\n"
+					     "    <drive axis=\"0\" type=\"loopback\"/>\n"
+					     "    <drive axis=\"1\" type=\"loopback\"/>\n"
+					     "    <battery source=\"fixed\" mv=\"23500\"/>\n"
+					     "  </backends>\n"
+					     "</vehicle>\n");
+	fw_write_file(FW_IOPATH, "<io>\n  <input id=\"1\" name=\"dock\"/>\n</io>\n");
 }
 
 static void test_fw_link_and_sigterm_mid_move(void **state)
@@ -517,7 +475,7 @@ static void test_fw_link_and_sigterm_mid_move(void **state)
 	start_fw();
 
 	/* The console answers first (the program may still be starting). */
-	sleep_ms(200);
+	fw_sleep_ms(200);
 	/* The configured 23500 mV, in the interface's 0.1 V units. */
 	console("getBatteryVoltage", reply, sizeof(reply));
 	assert_string_equal(reply, "ok true 235.000");
@@ -536,7 +494,7 @@ static void test_fw_link_and_sigterm_mid_move(void **state)
 	/* 2 m at the default 500 mm/s: several seconds of motion. */
 	assert_int_equal(vc_moveForward(&c, &ret, 2000.0), VC_OK);
 	assert_true(ret);
-	sleep_ms(500);
+	fw_sleep_ms(500);
 	int16_t st = 0;
 	char msg[VS_STATE_MSG_MAX];
 	assert_int_equal(vc_getState(&c, &ret, &st, msg), VC_OK);
@@ -557,7 +515,7 @@ static void test_fw_link_and_sigterm_mid_move(void **state)
 	vc_close(&c);
 
 	assert_int_equal(stop_fw(), 0);
-	read_log(log, sizeof(log));
+	fw_read_log(log, sizeof(log));
 	/* Decelerated (not cut), then servo off and power off. */
 	assert_non_null(strstr(log, "vehicle-fw: signal: stopping the unit\n"));
 	assert_non_null(strstr(log, "vehicle-fw: shutdown: stopped after "));
@@ -575,9 +533,9 @@ static void test_fw_sigterm_idle(void **state)
 	char log[8192];
 	write_fw_config();
 	start_fw();
-	sleep_ms(200);
+	fw_sleep_ms(200);
 	assert_int_equal(stop_fw(), 0);
-	read_log(log, sizeof(log));
+	fw_read_log(log, sizeof(log));
 	assert_null(strstr(log, "shutdown: stopped after"));
 	assert_non_null(
 	    strstr(log, "vehicle-fw: final state: unpowered, relay open, servo off, stopped\n"));
@@ -590,16 +548,17 @@ static void test_fw_bad_config(void **state)
 {
 	(void)state;
 	char cmd[2048], out[1024], want[1024];
-	write_file(VPATH, VEHICLE_HEAD "<backends><power settle_ms=\"99\"/></backends></vehicle>\n");
-	snprintf(cmd, sizeof(cmd), "%s/vehicle-fw --config %s --io %s --rt-priority 0 2>&1", BUILD_DIR,
-		 VPATH, IOPATH);
+	fw_write_file(FW_VPATH,
+		      VEHICLE_HEAD "<backends><power settle_ms=\"99\"/></backends></vehicle>\n");
+	snprintf(cmd, sizeof(cmd), "%s/vehicle-fw --config %s --io %s --rt-priority 0 2>&1",
+		 FW_BUILD_DIR, FW_VPATH, FW_IOPATH);
 	FILE *p = popen(cmd, "r");
 	assert_non_null(p);
 	size_t n = fread(out, 1, sizeof(out) - 1, p);
 	out[n] = '\0';
 	assert_int_equal(pclose(p), 1 << 8);
 	snprintf(want, sizeof(want),
-		 "vehicle-fw: error: %s:4: power.settle_ms: out of range 0..50 '99'\n", VPATH);
+		 "vehicle-fw: error: %s:4: power.settle_ms: out of range 0..50 '99'\n", FW_VPATH);
 	assert_string_equal(out, want);
 }
 
@@ -629,21 +588,10 @@ int main(int argc, char **argv)
 	    cmocka_unit_test_teardown(test_fw_sigterm_idle, teardown),
 	    cmocka_unit_test_teardown(test_fw_bad_config, teardown),
 	};
-	if (argc > 0) {
-		char tmp[512];
-		snprintf(tmp, sizeof(tmp), "%s", argv[0]);
-		snprintf(BUILD_DIR, sizeof(BUILD_DIR), "%s", dirname(dirname(tmp)));
-	}
-	if (!mkdtemp(DIR_))
+	if (fw_rig_init(argc > 0 ? argv[0] : NULL, "vsfw") < 0)
 		return 1;
-	snprintf(VPATH, sizeof(VPATH), "%s/vehicle.xml", DIR_);
-	snprintf(IOPATH, sizeof(IOPATH), "%s/io.xml", DIR_);
-	snprintf(LOGPATH, sizeof(LOGPATH), "%s/fw.log", DIR_);
 	signal(SIGPIPE, SIG_IGN);
 	int rc = cmocka_run_group_tests(tests, NULL, NULL);
-	unlink(VPATH);
-	unlink(IOPATH);
-	unlink(LOGPATH);
-	rmdir(DIR_);
+	fw_rig_cleanup();
 	return rc;
 }

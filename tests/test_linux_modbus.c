@@ -5,9 +5,7 @@
  * a drive's unit and of a BMS of its own, changing, failing and returning. */
 #include <errno.h>
 #include <fcntl.h>
-#include <libgen.h>
 #include <poll.h>
-#include <pty.h>
 #include <setjmp.h>
 #include <signal.h>
 #include <stdarg.h>
@@ -17,31 +15,20 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
-#include <termios.h>
 #include <time.h>
 #include <unistd.h>
 
 #include <cmocka.h>
 
-static char BUILD_DIR[512] = "build";
-static char DIR_[] = "/tmp/vsmbXXXXXX";
-static char VPATH[600], IOPATH[600], LOGPATH[600], BUS_A[600], BUS_B[600];
+#include "fw_rig.h"
+
+static char BUS_A[600], BUS_B[600];
 static pid_t SOCAT = -1, SIM = -1, FW = -1;
 static int MASTER = -1, SIM_CTL = -1; /* SIM_CTL: the simulator's stdin */
 
-static void write_file(const char *path, const char *text)
+static void console(const char *line, char *reply, size_t cap)
 {
-	FILE *f = fopen(path, "w");
-	assert_non_null(f);
-	assert_true(fputs(text, f) >= 0);
-	assert_int_equal(fclose(f), 0);
-}
-
-static void sleep_ms(long ms)
-{
-	struct timespec ts = {ms / 1000, (ms % 1000) * 1000000L};
-	while (nanosleep(&ts, &ts) != 0 && errno == EINTR)
-		;
+	fw_console(MASTER, line, reply, cap, 3000);
 }
 
 /* in: NULL, or where to put the write end of a pipe to its stdin. */
@@ -96,22 +83,6 @@ static void reap(pid_t *p, int sig)
 }
 
 /* One console line on the raw link; the reply line without its newline. */
-static void console(const char *line, char *reply, size_t cap)
-{
-	size_t n = 0;
-	assert_int_equal(write(MASTER, line, strlen(line)), (ssize_t)strlen(line));
-	assert_int_equal(write(MASTER, "\n", 1), 1);
-	while (n + 1 < cap) {
-		struct pollfd p = {.fd = MASTER, .events = POLLIN};
-		assert_int_equal(poll(&p, 1, 3000), 1);
-		assert_int_equal(read(MASTER, reply + n, 1), 1);
-		if (reply[n] == '\n')
-			break;
-		n++;
-	}
-	reply[n] = '\0';
-}
-
 static void expect(const char *line, const char *want)
 {
 	char reply[512];
@@ -130,7 +101,7 @@ static void wait_reply(const char *line, const char *want, long ms)
 		console(line, reply, sizeof(reply));
 		if (!strcmp(reply, want))
 			return;
-		sleep_ms(20);
+		fw_sleep_ms(20);
 	} while (now_ms() < end);
 	print_message("%s: '%s', expected '%s'\n", line, reply, want);
 	fail();
@@ -141,25 +112,16 @@ static void wait_state(const char *want, long ms)
 	wait_reply("getState", want, ms);
 }
 
-static void read_log(char *buf, size_t cap)
-{
-	FILE *f = fopen(LOGPATH, "r");
-	assert_non_null(f);
-	size_t n = fread(buf, 1, cap - 1, f);
-	buf[n] = '\0';
-	fclose(f);
-}
-
 /* Polls vehicle-fw's log until it holds text (bounded by ms). */
 static void wait_log(const char *text, long ms)
 {
 	char log[8192];
 	long end = now_ms() + ms;
 	do {
-		read_log(log, sizeof(log));
+		fw_read_log(log, sizeof(log));
 		if (strstr(log, text))
 			return;
-		sleep_ms(20);
+		fw_sleep_ms(20);
 	} while (now_ms() < end);
 	print_message("log without '%s':\n%s", text, log);
 	fail();
@@ -189,10 +151,10 @@ static int setup_bus(void **state)
 	char *sa[] = {"socat", la, lb, NULL};
 	SOCAT = spawn(NULL, sa, NULL);
 	for (int i = 0; i < 100 && (stat(BUS_A, &sb) || stat(BUS_B, &sb)); i++)
-		sleep_ms(20);
+		fw_sleep_ms(20);
 	assert_int_equal(stat(BUS_B, &sb), 0);
 
-	snprintf(exe, sizeof(exe), "%s/mbdrive-sim", BUILD_DIR);
+	snprintf(exe, sizeof(exe), "%s/mbdrive-sim", FW_BUILD_DIR);
 	char *sm[] = {exe,
 		      "--port",
 		      BUS_A,
@@ -204,7 +166,7 @@ static int setup_bus(void **state)
 		      (char *)SIM_BATTERY_MV,
 		      NULL};
 	SIM = spawn(NULL, sm, &SIM_CTL);
-	sleep_ms(200); /* the simulator opens its port */
+	fw_sleep_ms(200); /* the simulator opens its port */
 	return 0;
 }
 
@@ -234,24 +196,19 @@ static void start_fw(void)
 	    "  </backends>\n"
 	    "</vehicle>\n",
 	    BUS_B, BATTERY_XML);
-	write_file(VPATH, text);
-	write_file(IOPATH, "<io/>\n");
+	fw_write_file(FW_VPATH, text);
+	fw_write_file(FW_IOPATH, "<io/>\n");
 
 	int slave;
-	assert_int_equal(openpty(&MASTER, &slave, NULL, NULL, NULL), 0);
 	char port[256];
-	snprintf(port, sizeof(port), "%s", ttyname(slave));
-	struct termios t;
-	tcgetattr(MASTER, &t);
-	cfmakeraw(&t);
-	tcsetattr(MASTER, TCSANOW, &t);
-	snprintf(exe, sizeof(exe), "%s/vehicle-fw", BUILD_DIR);
-	char *fa[] = {exe,	"--config", VPATH,	     "--io",	   IOPATH,
+	MASTER = fw_open_port(&slave, port, sizeof(port));
+	snprintf(exe, sizeof(exe), "%s/vehicle-fw", FW_BUILD_DIR);
+	char *fa[] = {exe,	"--config", FW_VPATH,	     "--io",	   FW_IOPATH,
 		      "--port", port,	    "--rt-priority", (char *)"10", NULL};
 	FW_START_MS = now_ms();
-	FW = spawn(LOGPATH, fa, NULL);
+	FW = spawn(FW_LOGPATH, fa, NULL);
 	close(slave);
-	sleep_ms(300);
+	fw_sleep_ms(300);
 }
 
 static int setup(void **state)
@@ -332,7 +289,7 @@ static void test_drive_error(void **state)
 	expect("getServoStatus 0", "ok true false");
 	expect("clearAlarm", "ok true");
 	/* The reset went to the drive: its alarm stays clear. */
-	sleep_ms(200);
+	fw_sleep_ms(200);
 	expect("getState", "ok true 24 \"Powered\"");
 	expect("setServo true", "ok true");
 	wait_state("ok true 16 \"Ready\"", 1000);
@@ -357,7 +314,7 @@ static void test_drive_silent_then_sigterm(void **state)
 	FW = -1;
 	assert_true(WIFEXITED(status));
 	assert_int_equal(WEXITSTATUS(status), 0);
-	FILE *f = fopen(LOGPATH, "r");
+	FILE *f = fopen(FW_LOGPATH, "r");
 	assert_non_null(f);
 	size_t n = fread(log, 1, sizeof(log) - 1, f);
 	log[n] = '\0';
@@ -391,7 +348,7 @@ static void test_battery_bms(void **state)
 	 * the unit stays ready (its drives still answer). */
 	sim_ctl("battery silent");
 	long t0 = now_ms();
-	sleep_ms(1000);
+	fw_sleep_ms(1000);
 	expect("getBatteryVoltage", "ok true 230.000");
 	expect("getState", "ok true 16 \"Ready\"");
 	console("$rt", reply, sizeof(reply));
@@ -423,7 +380,7 @@ static void test_battery_bms(void **state)
 	wait_reply("getBatteryVoltage", "ok true 230.000", 1000);
 	expect("clearAlarm", "ok true");
 	expect("getState", "ok true 24 \"Powered\"");
-	read_log(log, sizeof(log));
+	fw_read_log(log, sizeof(log));
 	snprintf(
 	    want, sizeof(want),
 	    "vehicle-fw: warning: battery: no reading from unit 10 on %s for 2000 ms: it reads 0 "
@@ -444,7 +401,7 @@ static int setup_bms_silent(void **state)
 	BATTERY_XML = BATTERY_BMS;
 	setup_bus(state);
 	sim_ctl("battery silent");
-	sleep_ms(50);
+	fw_sleep_ms(50);
 	start_fw();
 	return 0;
 }
@@ -471,7 +428,7 @@ static void test_pymodbus_crosscheck(void **state)
 	char cmd[1500], out[1024];
 	/* Above 65535 mV: the 32-bit register pair has a high word. */
 	sim_ctl("battery 71850");
-	sleep_ms(50);
+	fw_sleep_ms(50);
 	snprintf(cmd, sizeof(cmd),
 		 "/usr/bin/python3 hal/linux/sim/mb_crosscheck.py %s %d 1 71850 2>&1", BUS_B,
 		 (int)SIM);
@@ -497,23 +454,12 @@ int main(int argc, char **argv)
 	    cmocka_unit_test_setup_teardown(test_battery_absent_at_start, setup_bms_silent,
 					    teardown_bms),
 	};
-	if (argc > 0) {
-		char tmp[512];
-		snprintf(tmp, sizeof(tmp), "%s", argv[0]);
-		snprintf(BUILD_DIR, sizeof(BUILD_DIR), "%s", dirname(dirname(tmp)));
-	}
-	if (!mkdtemp(DIR_))
+	if (fw_rig_init(argc > 0 ? argv[0] : NULL, "vsmb") < 0)
 		return 1;
-	snprintf(VPATH, sizeof(VPATH), "%s/vehicle.xml", DIR_);
-	snprintf(IOPATH, sizeof(IOPATH), "%s/io.xml", DIR_);
-	snprintf(LOGPATH, sizeof(LOGPATH), "%s/fw.log", DIR_);
-	snprintf(BUS_A, sizeof(BUS_A), "%s/bus-a", DIR_);
-	snprintf(BUS_B, sizeof(BUS_B), "%s/bus-b", DIR_);
+	snprintf(BUS_A, sizeof(BUS_A), "%s/bus-a", FW_DIR);
+	snprintf(BUS_B, sizeof(BUS_B), "%s/bus-b", FW_DIR);
 	signal(SIGPIPE, SIG_IGN);
 	int rc = cmocka_run_group_tests(tests, NULL, NULL);
-	unlink(VPATH);
-	unlink(IOPATH);
-	unlink(LOGPATH);
-	rmdir(DIR_);
+	fw_rig_cleanup();
 	return rc;
 }
