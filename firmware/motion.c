@@ -15,6 +15,14 @@ static motion_cmd_t *q_at(motion_t *m, uint8_t i)
 	return &m->q[(uint8_t)(m->q_head + i) % MOTION_QUEUE_LEN];
 }
 
+/* The active piece's limits and stopping-distance term are cached: every
+ * change to the settings or the queue drops them, and the next tick
+ * recomputes them once. */
+static void limits_changed(motion_t *m)
+{
+	m->lim_ok = false;
+}
+
 static void per_tick(motion_t *m)
 {
 	int64_t hz = m->p.tick_hz;
@@ -44,6 +52,7 @@ void motion_set_velocity(motion_t *m, q32_t vt, q32_t vr)
 	m->v_t_pt = vt / m->p.tick_hz;
 	m->v_r_pt = vr / m->p.tick_hz;
 	backward_pass(m);
+	limits_changed(m);
 }
 
 void motion_set_accel(motion_t *m, q32_t at, q32_t ar)
@@ -55,6 +64,7 @@ void motion_set_accel(motion_t *m, q32_t at, q32_t ar)
 		m->a_t_pt2 = 1;
 	if (m->a_r_pt2 < 1)
 		m->a_r_pt2 = 1;
+	limits_changed(m);
 }
 
 void motion_set_jog_timeout_ms(motion_t *m, uint32_t ms)
@@ -65,6 +75,7 @@ void motion_set_jog_timeout_ms(motion_t *m, uint32_t ms)
 void motion_set_caution(motion_t *m, q32_t vt_cap)
 {
 	m->cap_t_pt = vt_cap / m->p.tick_hz;
+	limits_changed(m);
 }
 
 /* Rigid transform taking the reference pose onto a redefined pose: every
@@ -165,6 +176,7 @@ static bool push(motion_t *m, const motion_cmd_t *c)
 		return false;
 	*q_at(m, m->q_count) = *c;
 	m->q_count++;
+	limits_changed(m);
 	if (m->mode == MODE_IDLE)
 		m->mode = MODE_PATH;
 	return true;
@@ -176,6 +188,7 @@ static void pop(motion_t *m)
 		return;
 	m->q_head = (uint8_t)((m->q_head + 1) % MOTION_QUEUE_LEN);
 	m->q_count--;
+	limits_changed(m);
 }
 
 /* Rotate a body-frame vector into the world frame at heading th. */
@@ -296,6 +309,7 @@ static q32_t cruise_line_len(motion_t *m, uint8_t i)
 static void backward_pass(motion_t *m)
 {
 	q32_t next_v = 0;
+	limits_changed(m);
 	for (uint8_t i = 0; i < m->q_count; i++) {
 		motion_cmd_t *c = q_at(m, i);
 		if (c->kind == MCMD_CRUISE && c->start_known)
@@ -337,7 +351,9 @@ static void plan_corner(motion_t *m, uint8_t i)
 	motion_cmd_t *c = q_at(m, i), *n = q_at(m, (uint8_t)(i + 1));
 	if (c->kind != MCMD_CRUISE || n->kind != MCMD_CRUISE || !c->start_known || c->has_corner)
 		return;
-	if (i == 0 && c->stage > 1)
+	/* The head command's stage 2 is its line running (next_piece): a
+	 * corner can still be fitted in what is left of it. */
+	if (i == 0 && (c->stage > 2 || (c->stage == 2 && m->seg.kind != SEG_LINE)))
 		return; /* already past its line */
 	q32_t inx = c->target.x_mm - c->sx_mm, iny = c->target.y_mm - c->sy_mm;
 	q32_t outx = n->target.x_mm - c->target.x_mm, outy = n->target.y_mm - c->target.y_mm;
@@ -382,7 +398,10 @@ static void plan_corner(motion_t *m, uint8_t i)
 			backward_pass(m);
 			return;
 		}
+		/* The line now ends at the corner entry. */
 		m->seg.len -= corner.t_mm;
+		m->seg.p_end.x_mm = c->target.x_mm - fx_mul_q30(corner.t_mm, m->seg.ux);
+		m->seg.p_end.y_mm = c->target.y_mm - fx_mul_q30(corner.t_mm, m->seg.uy);
 	}
 }
 
@@ -481,6 +500,7 @@ void motion_resume(motion_t *m)
 void motion_stop(motion_t *m)
 {
 	m->q_count = 0;
+	limits_changed(m);
 	m->stopping = true;
 	m->vtarget = (fx_twist_t){0};
 }
@@ -488,6 +508,7 @@ void motion_stop(motion_t *m)
 void motion_halt(motion_t *m)
 {
 	m->q_count = 0;
+	limits_changed(m);
 	m->seg.kind = SEG_NONE;
 	m->v = 0;
 	m->vel = (fx_twist_t){0};
@@ -747,25 +768,24 @@ static void piece_limits(const motion_t *m, q32_t *vmax, q32_t *a)
 		*a = 1;
 }
 
-/* Distance the profile must be able to stop within, for the active piece. */
-static q32_t piece_horizon(motion_t *m, q32_t a)
+/* Distance beyond the active piece's end that the profile may count on
+ * to stop within: a blended corner's virtual stop (traj.h). */
+static q32_t piece_horizon_extra(motion_t *m, q32_t a)
 {
-	seg_t *g = &m->seg;
-	q32_t rem = g->len - g->s;
+	const seg_t *g = &m->seg;
 	if (m->q_count == 0)
-		return rem;
+		return 0;
 	motion_cmd_t *c = q_at(m, 0);
 	if (c->kind != MCMD_CRUISE || !c->has_corner)
-		return rem;
+		return 0;
 	if (g->kind == SEG_LINE)
-		return rem + traj_brake_dist(c->vend_pt, a) + c->vend_pt;
+		return traj_brake_dist(c->vend_pt, a) + c->vend_pt;
 	if (g->kind == SEG_CORNER && m->q_count >= 2) {
 		motion_cmd_t *n = q_at(m, 1);
-		q32_t after = n->line_mm;
 		q32_t nv = (n->kind == MCMD_CRUISE && n->has_corner) ? n->vend_pt : 0;
-		return rem + after + traj_brake_dist(nv, a) + nv;
+		return n->line_mm + traj_brake_dist(nv, a) + nv;
 	}
-	return rem;
+	return 0;
 }
 
 /* Moves the reference pose, in place, from the progress g->s to s along
@@ -882,11 +902,16 @@ static void path_tick(motion_t *m, fx_twist_t *out)
 				continue;
 			}
 			m->seg.s = 0;
+			limits_changed(m);
 		}
 		if (budget < 0) {
-			q32_t vmax, a;
-			piece_limits(m, &vmax, &a);
-			q32_t u = traj_step(m->v, piece_horizon(m, a), vmax, a);
+			if (!m->lim_ok) {
+				piece_limits(m, &m->lim_vmax, &m->lim_a);
+				m->lim_extra = piece_horizon_extra(m, m->lim_a);
+				m->lim_ok = true;
+			}
+			q32_t u = traj_step(m->v, m->seg.len - m->seg.s + m->lim_extra, m->lim_vmax,
+					    m->lim_a);
 			if (braking) {
 				/* Stop at the acceleration limit, along the path. */
 				q32_t amax = m->amax_t_pt2;

@@ -118,6 +118,10 @@ typedef struct {
 
 	seg_t seg; /* active piece (mode PATH) */
 	q32_t v;   /* speed along the active piece, per tick */
+	/* The active piece's speed cap, acceleration and stopping distance
+	 * beyond its end, valid while lim_ok (motion.c drops it on any change). */
+	q32_t lim_vmax, lim_a, lim_extra;
+	bool lim_ok;
 
 	/* Jog / joystick velocity target (body frame, per tick). */
 	fx_twist_t vtarget;

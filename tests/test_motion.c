@@ -256,6 +256,99 @@ static void test_arc_quarter(void **state)
 }
 
 
+/* The active piece's limits follow every change made while it runs: a lower
+ * speed, a caution cap inside a corner, a waypoint queued behind the line. */
+static void test_limits_change_mid_piece(void **state)
+{
+	(void)state;
+	rig_t r;
+	rig_init(&r, MOTION_KIN_DIFF);
+	const q32_t a = q(500) / HZ / HZ;
+	assert_true(motion_forward(&r.m, q(3000)));
+	for (int i = 0; i < 1500; i++)
+		rig_tick(&r);
+	assert_int_equal(r.m.v, q(500) / HZ);
+	/* 500 -> 200 mm/s at a per tick: 600 whole steps, then the cap. */
+	motion_set_velocity(&r.m, q(200), q(90));
+	for (int i = 0; i < 600; i++)
+		rig_tick(&r);
+	assert_int_equal(r.m.v, q(500) / HZ - 600 * a);
+	rig_tick(&r);
+	assert_int_equal(r.m.v, q(200) / HZ);
+	run_until_idle(&r, 30000);
+	assert_int_equal(r.m.ref.x_mm, q(3000));
+
+	/* Caution cap set inside a corner: the speed falls every tick until it
+	 * is at the cap, and stays there. */
+	rig_init(&r, MOTION_KIN_DIFF);
+	assert_true(motion_cruise_abs(&r.m, q(1000), 0));
+	assert_true(motion_cruise_abs(&r.m, q(1000), q(1000)));
+	uint32_t guard = 0;
+	while (r.m.seg.kind != SEG_CORNER && guard++ < 10000)
+		rig_tick(&r);
+	assert_int_equal(r.m.seg.kind, SEG_CORNER);
+	q32_t cap = q(50) / HZ;
+	assert_true(r.m.v > cap);
+	motion_set_caution(&r.m, q(50));
+	q32_t prev = r.m.v;
+	bool reached = false;
+	for (int i = 0; i < 2000; i++) {
+		rig_tick(&r);
+		if (!reached) {
+			assert_true(r.m.v < prev);
+			reached = r.m.v <= cap;
+		} else if (r.m.seg.kind == SEG_LINE && r.m.seg.len - r.m.seg.s > q(100)) {
+			assert_int_equal(r.m.v, cap);
+		}
+		prev = r.m.v;
+	}
+	assert_true(reached);
+	run_until_idle(&r, 60000);
+	assert_int_equal(r.m.ref.x_mm, q(1000));
+	assert_int_equal(r.m.ref.y_mm, q(1000));
+
+	/* A waypoint queued while the last line runs: the unit blends into it
+	 * instead of stopping at the old end. */
+	rig_init(&r, MOTION_KIN_DIFF);
+	assert_true(motion_cruise_abs(&r.m, q(2000), 0));
+	while (d(r.m.ref.x_mm) < 500)
+		rig_tick(&r);
+	assert_true(motion_cruise_abs(&r.m, q(2000), q(1000)));
+	uint32_t stops = 0;
+	double closest = 1e9;
+	while (motion_has_work(&r.m)) {
+		rig_tick(&r);
+		if (r.m.v == 0 && hypot(d(r.m.ref.x_mm) - 2000, d(r.m.ref.y_mm) - 1000) > 1)
+			stops++;
+		closest = fmin(closest, hypot(d(r.m.ref.x_mm) - 2000, d(r.m.ref.y_mm)));
+	}
+	assert_int_equal(stops, 0);
+	assert_true(closest > 10);
+	assert_int_equal(r.m.ref.x_mm, q(2000));
+	assert_int_equal(r.m.ref.y_mm, q(1000));
+	assert_true(r.ax_max <= 500.0 * 1.00001);
+	assert_true(r.aw_max <= 180.0 * 1.00001);
+
+	/* Queued too late to slow down for a corner (20 mm before the end at
+	 * 500 mm/s): the unit stops on the old end, then goes on. */
+	rig_init(&r, MOTION_KIN_DIFF);
+	assert_true(motion_cruise_abs(&r.m, q(2000), 0));
+	while (d(r.m.ref.x_mm) < 1980)
+		rig_tick(&r);
+	assert_true(motion_cruise_abs(&r.m, q(2000), q(1000)));
+	bool stopped_on_end = false;
+	while (motion_has_work(&r.m)) {
+		rig_tick(&r);
+		if (r.m.v == 0 && r.m.ref.x_mm == q(2000) && r.m.ref.y_mm == 0)
+			stopped_on_end = true;
+	}
+	assert_true(stopped_on_end);
+	assert_int_equal(r.m.ref.x_mm, q(2000));
+	assert_int_equal(r.m.ref.y_mm, q(1000));
+	assert_true(r.ax_max <= 500.0 * 1.00001);
+}
+
+
 /* Redefining the pose mid-move keeps the motion's physical course: no
  * velocity step, and the end lands where it would have, in the new frame. */
 static void test_set_pose_while_moving(void **state)
@@ -358,6 +451,7 @@ int main(void)
 		cmocka_unit_test(test_set_pose_while_moving),
 		cmocka_unit_test(test_omni_modes),
 		cmocka_unit_test(test_set_pose_during_arc),
+		cmocka_unit_test(test_limits_change_mid_piece),
 	};
 	return cmocka_run_group_tests_name("motion", tests, NULL, NULL);
 }
