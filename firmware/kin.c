@@ -7,6 +7,7 @@ void kin_init(kin_t *k, const kin_params_t *p)
 {
 	*k = (kin_t){0};
 	k->p = *p;
+	k->p.n = p->kin == MOTION_KIN_OMNI ? 4 : 2;
 	/* 2^16 / counts_per_mm in Q32 is mm per count in Q48. */
 	k->mm_per_count_q48 = p->counts_per_mm > 0 ? fx_div((q32_t)1 << 48, p->counts_per_mm) : 0;
 	k->counts_per_deg = fx_mul(p->mm_per_deg, p->counts_per_mm);
@@ -53,14 +54,35 @@ static int32_t sat32(int64_t v)
 	return v > INT32_MAX ? INT32_MAX : (v < INT32_MIN ? INT32_MIN : (int32_t)v);
 }
 
+/* One wheel of the position loop: the reference advances by travel
+ * (counts, Q32), the measured step d (counts) is taken off, and the drive
+ * gets the feed-forward speed plus kp times what is left. Returns the wheel's
+ * |reference - measured| in whole counts. */
+static inline int64_t wheel_step(kin_t *k, uint8_t i, q32_t travel, int32_t d, int32_t *out_cps_q8)
+{
+	int64_t err_q32 = k->ref_counts_q32[i] + travel - (int64_t)d * FX_ONE;
+	k->ref_counts_q32[i] = err_q32;
+	int64_t ff_q8 = (travel * (int64_t)k->p.tick_hz) >> 24;
+	int64_t fb_q8 = ((err_q32 >> 16) * k->p.kp_q16) >> 24;
+	*out_cps_q8 = sat32(ff_q8 + fb_q8);
+	return fx_abs64(err_q32) >> 32;
+}
+
+/* Encoder step since the last tick (wrap-safe) and its length in mm. */
+static inline int32_t wheel_delta(kin_t *k, uint8_t i, const int32_t meas[], q32_t *mm)
+{
+	int32_t d = (int32_t)((uint32_t)meas[i] - (uint32_t)k->last_meas[i]);
+	k->last_meas[i] = meas[i];
+	*mm = ((q32_t)d * k->mm_per_count_q48) >> 16;
+	return d;
+}
+
 void kin_step(kin_t *k, const fx_twist_t *body, const int32_t meas[], int32_t out_cps_q8[],
 	      fx_twist_t *measured_delta, int64_t *following_err_counts)
 {
-	/* Zeroed: n follows kin at init (vs_config_axes), but kin_params_t alone
-	 * does not tie them; a mismatch reads 0, not stack garbage. */
-	q32_t meas_mm[KIN_MAX_WHEELS] = {0};
-	int64_t worst = 0;
-	bool moved = false;
+	q32_t mm[KIN_MAX_WHEELS];
+	int32_t d[KIN_MAX_WHEELS];
+	int64_t worst;
 	if (!k->synced)
 		kin_sync(k, meas);
 	/* Body twist straight to wheel counts: at most three products a tick,
@@ -68,40 +90,35 @@ void kin_step(kin_t *k, const fx_twist_t *body, const int32_t meas[], int32_t ou
 	 * speed limits, whose wheel rate config.c bounds below 2^23 counts/s:
 	 * the products fit. */
 	q32_t x = body->vx_pt ? fx_mul_fit(body->vx_pt, k->p.counts_per_mm) : 0;
-	q32_t y = body->vy_pt ? fx_mul_fit(body->vy_pt, k->p.counts_per_mm) : 0;
 	q32_t r = body->w_pt ? fx_mul_fit(body->w_pt, k->counts_per_deg) : 0;
-	q32_t travel[KIN_MAX_WHEELS] = {0};
+	/* The wheel count is fixed by the kinematics (kin_init): each form is
+	 * written out whole, with no per-wheel table. */
 	if (k->p.kin == MOTION_KIN_OMNI) {
-		travel[0] = x - y - r;
-		travel[1] = x + y + r;
-		travel[2] = x + y - r;
-		travel[3] = x - y + r;
+		q32_t y = body->vy_pt ? fx_mul_fit(body->vy_pt, k->p.counts_per_mm) : 0;
+		for (uint8_t i = 0; i < 4; i++)
+			d[i] = wheel_delta(k, i, meas, &mm[i]);
+		worst = wheel_step(k, 0, x - y - r, d[0], &out_cps_q8[0]);
+		worst = fx_max64(worst, wheel_step(k, 1, x + y + r, d[1], &out_cps_q8[1]));
+		worst = fx_max64(worst, wheel_step(k, 2, x + y - r, d[2], &out_cps_q8[2]));
+		worst = fx_max64(worst, wheel_step(k, 3, x - y + r, d[3], &out_cps_q8[3]));
+		if (measured_delta) {
+			if (d[0] | d[1] | d[2] | d[3])
+				kin_wheels_to_body(&k->p, mm, measured_delta);
+			else
+				*measured_delta = (fx_twist_t){0, 0, 0};
+		}
 	} else {
-		travel[0] = x - r;
-		travel[1] = x + r;
-	}
-	for (uint8_t i = 0; i < k->p.n; i++) {
-		int32_t d = (int32_t)((uint32_t)meas[i] - (uint32_t)k->last_meas[i]);
-		k->last_meas[i] = meas[i];
-		moved |= d != 0;
-		meas_mm[i] = ((q32_t)d * k->mm_per_count_q48) >> 16;
-
-		/* The reference keeps only the error: reference minus measured. */
-		k->ref_counts_q32[i] += travel[i] - (int64_t)d * FX_ONE;
-		int64_t err_q32 = k->ref_counts_q32[i];
-
-		int64_t ff_q8 = (travel[i] * (int64_t)k->p.tick_hz) >> 24;
-		int64_t fb_q8 = ((err_q32 >> 16) * k->p.kp_q16) >> 24;
-		out_cps_q8[i] = sat32(ff_q8 + fb_q8);
-		int64_t e = fx_abs64(err_q32) >> 32;
-		if (e > worst)
-			worst = e;
-	}
-	if (measured_delta) {
-		if (moved)
-			kin_wheels_to_body(&k->p, meas_mm, measured_delta);
-		else
-			*measured_delta = (fx_twist_t){0, 0, 0};
+		d[0] = wheel_delta(k, 0, meas, &mm[0]);
+		d[1] = wheel_delta(k, 1, meas, &mm[1]);
+		worst = wheel_step(k, 0, x - r, d[0], &out_cps_q8[0]);
+		worst = fx_max64(worst, wheel_step(k, 1, x + r, d[1], &out_cps_q8[1]));
+		if (measured_delta) {
+			/* kin_wheels_to_body's differential form, inline. */
+			measured_delta->vx_pt = (mm[0] + mm[1]) / 2;
+			measured_delta->vy_pt = 0;
+			measured_delta->w_pt =
+			    (d[0] | d[1]) ? fx_mul((mm[1] - mm[0]) / 2, k->p.deg_per_mm) : 0;
+		}
 	}
 	if (following_err_counts)
 		*following_err_counts = worst;

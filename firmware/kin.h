@@ -24,7 +24,7 @@
 
 typedef struct {
 	uint8_t kin; /* motion_kin_t */
-	uint8_t n;   /* wheels */
+	uint8_t n;   /* wheels: kin_init sets it from kin (2 or 4) */
 	uint32_t tick_hz;
 	q32_t counts_per_mm; /* Q32 */
 	/* Wheel travel (mm) per degree of body rotation, Q32: (T/2)*pi/180 on a
