@@ -117,8 +117,10 @@ void motion_set_pose(motion_t *m, const fx_pose_t *p)
 		motion_cmd_t *c = q_at(m, i);
 		map_pose(&f, &c->target);
 		map_point(&f, &c->cx_mm, &c->cy_mm);
-		if (c->kind == MCMD_CRUISE)
+		if (c->kind == MCMD_CRUISE) {
 			map_point(&f, &c->sx_mm, &c->sy_mm);
+			map_dir(&f, &c->ux, &c->uy);
+		}
 	}
 	if (m->seg.kind != SEG_NONE) {
 		map_pose(&f, &m->seg.p0);
@@ -283,9 +285,21 @@ static q32_t corner_cap(const motion_t *m, const motion_cmd_t *c)
 	return v;
 }
 
-static q32_t seg_dist(q32_t x0, q32_t y0, q32_t x1, q32_t y1)
+/* A cruise command's line geometry, once its start is known: the square
+ * root and divisions are paid when it is queued, not in the tick that
+ * blends into it. */
+static void cruise_set_start(motion_cmd_t *c, q32_t sx, q32_t sy)
 {
-	return fx_hypot(x1 - x0, y1 - y0);
+	c->sx_mm = sx;
+	c->sy_mm = sy;
+	c->start_known = true;
+	q32_t dx = c->target.x_mm - sx, dy = c->target.y_mm - sy;
+	c->len_mm = fx_hypot(dx, dy);
+	c->ux = c->uy = 0;
+	if (c->len_mm > 0) {
+		c->ux = (int32_t)(fx_div(dx, c->len_mm) >> 2);
+		c->uy = (int32_t)(fx_div(dy, c->len_mm) >> 2);
+	}
 }
 
 /* Length of cruise command i's straight part: from the previous corner's
@@ -293,7 +307,7 @@ static q32_t seg_dist(q32_t x0, q32_t y0, q32_t x1, q32_t y1)
 static q32_t cruise_line_len(motion_t *m, uint8_t i)
 {
 	motion_cmd_t *c = q_at(m, i);
-	q32_t l = seg_dist(c->sx_mm, c->sy_mm, c->target.x_mm, c->target.y_mm);
+	q32_t l = c->len_mm;
 	if (i > 0) {
 		motion_cmd_t *p = q_at(m, (uint8_t)(i - 1));
 		if (p->kind == MCMD_CRUISE && p->has_corner)
@@ -357,7 +371,7 @@ static void plan_corner(motion_t *m, uint8_t i)
 		return; /* already past its line */
 	q32_t inx = c->target.x_mm - c->sx_mm, iny = c->target.y_mm - c->sy_mm;
 	q32_t outx = n->target.x_mm - c->target.x_mm, outy = n->target.y_mm - c->target.y_mm;
-	q32_t lin = fx_hypot(inx, iny), lout = fx_hypot(outx, outy);
+	q32_t lin = c->len_mm, lout = n->len_mm;
 	if (lin < TINY_MM || lout < TINY_MM)
 		return;
 	q32_t hin = fx_atan2_deg(iny, inx), hout = fx_atan2_deg(outy, outx);
@@ -400,8 +414,8 @@ static void plan_corner(motion_t *m, uint8_t i)
 		}
 		/* The line now ends at the corner entry. */
 		m->seg.len -= corner.t_mm;
-		m->seg.p_end.x_mm = c->target.x_mm - fx_mul_q30(corner.t_mm, m->seg.ux);
-		m->seg.p_end.y_mm = c->target.y_mm - fx_mul_q30(corner.t_mm, m->seg.uy);
+		m->seg.p_end.x_mm = c->target.x_mm - fx_mul_q30(corner.t_mm, c->ux);
+		m->seg.p_end.y_mm = c->target.y_mm - fx_mul_q30(corner.t_mm, c->uy);
 	}
 }
 
@@ -411,7 +425,9 @@ bool motion_cruise_abs(motion_t *m, q32_t x_mm, q32_t y_mm)
 	c.kind = MCMD_CRUISE;
 	c.target.x_mm = x_mm;
 	c.target.y_mm = y_mm;
-	c.start_known = tail_end(m, &c.sx_mm, &c.sy_mm);
+	q32_t sx, sy;
+	if (tail_end(m, &sx, &sy))
+		cruise_set_start(&c, sx, sy);
 	if (!push(m, &c))
 		return false;
 	if (m->q_count >= 2)
@@ -557,6 +573,30 @@ static void seg_turn(motion_t *m, q32_t angle)
 	g->p_end.th_deg = fx_wrap_deg(m->ref.th_deg + angle);
 }
 
+/* The straight part of cruise command c, from the reference (its start, or
+ * the previous corner's exit) along the direction planned when it was
+ * queued, to its corner's entry or its waypoint. The length is measured
+ * along that direction: no square root or division in the tick that blends
+ * into it. The heading is already along the line (turn or corner before). */
+static void cruise_line(motion_t *m, const motion_cmd_t *c)
+{
+	seg_t *g = &m->seg;
+	const fx_pose_t *r = &m->ref;
+	*g = (seg_t){0};
+	g->kind = SEG_LINE;
+	g->dir = 1;
+	g->p0 = *r;
+	g->ux = c->ux;
+	g->uy = c->uy;
+	q32_t t = c->has_corner ? c->corner.t_mm : 0;
+	g->p_end.x_mm = c->target.x_mm - fx_mul_q30(t, c->ux);
+	g->p_end.y_mm = c->target.y_mm - fx_mul_q30(t, c->uy);
+	g->p_end.th_deg = r->th_deg;
+	q32_t len = fx_mul_q30(g->p_end.x_mm - r->x_mm, c->ux) +
+		    fx_mul_q30(g->p_end.y_mm - r->y_mm, c->uy);
+	g->len = len > 0 ? len : 0;
+}
+
 /* Sets up the next piece of the head command; false when it is finished. */
 static bool next_piece(motion_t *m)
 {
@@ -661,9 +701,7 @@ static bool next_piece(motion_t *m)
 			switch (c->stage++) {
 			case 0: {
 				if (!c->start_known) {
-					c->sx_mm = r->x_mm;
-					c->sy_mm = r->y_mm;
-					c->start_known = true;
+					cruise_set_start(c, r->x_mm, r->y_mm);
 					if (m->q_count >= 2)
 						plan_corner(m, 0);
 					backward_pass(m);
@@ -679,47 +717,31 @@ static bool next_piece(motion_t *m)
 				seg_turn(m, a);
 				return true;
 			}
-			case 1: {
-				q32_t tx = c->target.x_mm, ty = c->target.y_mm;
-				q32_t dx = tx - c->sx_mm, dy = ty - c->sy_mm;
-				q32_t l = fx_hypot(dx, dy);
-				if (l < TINY_MM)
+			case 1:
+				if (c->len_mm < TINY_MM)
 					continue;
-				seg_line(m, r, tx, ty, r->th_deg);
-				m->seg.p_end.th_deg = r->th_deg;
-				m->seg.dth = 0;
-				if (c->has_corner)
-					m->seg.len -= c->corner.t_mm;
-				if (m->seg.len < 0)
-					m->seg.len = 0;
-				/* The line ends at the corner entry: stay exactly on it. */
-				m->seg.p_end.x_mm = tx - fx_mul_q30(c->corner.t_mm, m->seg.ux);
-				m->seg.p_end.y_mm = ty - fx_mul_q30(c->corner.t_mm, m->seg.uy);
-				if (!c->has_corner) {
-					m->seg.p_end.x_mm = tx;
-					m->seg.p_end.y_mm = ty;
-				}
+				cruise_line(m, c);
 				return true;
-			}
 			case 2: {
-				if (!c->has_corner || c->corner.lh_mm == 0)
+				if (!c->has_corner || c->corner.lh_mm == 0 || m->q_count < 2)
 					continue;
+				const motion_cmd_t *n = q_at(m, 1);
 				seg_t *g = &m->seg;
-				int32_t ux = g->ux, uy = g->uy;
 				*g = (seg_t){0};
 				g->kind = SEG_CORNER;
+				g->dir = 1;
 				g->p0 = *r;
-				g->ux = ux;
-				g->uy = uy;
+				g->ux = c->ux;
+				g->uy = c->uy;
 				g->corner = c->corner;
 				g->len = 2 * c->corner.lh_mm;
-				/* Exit: the waypoint plus the tangent length along the new line. */
-				q32_t th_out = fx_wrap_deg(r->th_deg + c->corner.phi_deg);
-				int32_t so, co;
-				fx_sincos_bam(fx_deg_to_bam(th_out), &so, &co);
-				g->p_end.x_mm = c->target.x_mm + fx_mul_q30(c->corner.t_mm, co);
-				g->p_end.y_mm = c->target.y_mm + fx_mul_q30(c->corner.t_mm, so);
-				g->p_end.th_deg = th_out;
+				/* Exit: the waypoint plus the tangent length along the next
+				 * line. The integration arrives there within nanometres
+				 * (clothoid heading exact, midpoint steps); the piece ends
+				 * on it, so the next line is the one planned. */
+				g->p_end.x_mm = c->target.x_mm + fx_mul_q30(c->corner.t_mm, n->ux);
+				g->p_end.y_mm = c->target.y_mm + fx_mul_q30(c->corner.t_mm, n->uy);
+				g->p_end.th_deg = fx_wrap_deg(r->th_deg + c->corner.phi_deg);
 				return true;
 			}
 			default:
@@ -890,6 +912,12 @@ static void path_tick(motion_t *m, fx_twist_t *out)
 	}
 	fx_pose_t start = m->ref;
 	q32_t budget = -1;
+	/* Path length covered this tick, and whether every piece it crossed is
+	 * a straight line or a corner (path length and heading change are then
+	 * the whole twist of a differential base). */
+	q32_t moved = 0;
+	bool along = true;
+	int8_t dir = 0;
 	for (;;) {
 		if (m->seg.kind == SEG_NONE) {
 			if (m->q_count == 0) {
@@ -908,10 +936,15 @@ static void path_tick(motion_t *m, fx_twist_t *out)
 			if (!m->lim_ok) {
 				piece_limits(m, &m->lim_vmax, &m->lim_a);
 				m->lim_extra = piece_horizon_extra(m, m->lim_a);
+				m->lim_cruise = m->lim_vmax + traj_brake_dist(m->lim_vmax, m->lim_a);
 				m->lim_ok = true;
 			}
-			q32_t u = traj_step(m->v, m->seg.len - m->seg.s + m->lim_extra, m->lim_vmax,
-					    m->lim_a);
+			q32_t d = m->seg.len - m->seg.s + m->lim_extra;
+			/* At the cap with room to stop from it, traj_step keeps the
+			 * speed: skip it (its braking distance has a division). */
+			q32_t u = m->v == m->lim_vmax && d >= m->lim_cruise
+				      ? m->v
+				      : traj_step(m->v, d, m->lim_vmax, m->lim_a);
 			if (braking) {
 				/* Stop at the acceleration limit, along the path. */
 				q32_t amax = m->amax_t_pt2;
@@ -937,24 +970,14 @@ static void path_tick(motion_t *m, fx_twist_t *out)
 			m->v = u;
 		}
 		q32_t rem = m->seg.len - m->seg.s;
+		along = along && (m->seg.kind == SEG_CORNER ||
+				  (m->seg.kind == SEG_LINE && m->seg.dth == 0));
+		if (dir == 0)
+			dir = m->seg.dir;
 		if (budget < rem) {
 			piece_advance(m, m->seg.s + budget);
 			m->seg.s += budget;
-			if (m->seg.kind == SEG_LINE && m->p.kin == MOTION_KIN_DIFF &&
-			    m->seg.s != budget) {
-				*out = (fx_twist_t){.vx_pt = m->seg.dir * budget};
-				return;
-			}
-			if (m->seg.kind == SEG_CORNER && m->p.kin == MOTION_KIN_DIFF &&
-			    m->seg.s != budget) {
-				/* Path length at the heading change of the step; the
-				 * odometry integrates it at the midpoint heading, as the
-				 * corner's own integration does. */
-				*out =
-				    (fx_twist_t){.vx_pt = budget,
-						 .w_pt = fx_wrap_deg(m->ref.th_deg - start.th_deg)};
-				return;
-			}
+			moved += budget;
 			if (m->seg.kind == SEG_TURN && m->seg.s != budget) {
 				*out = (fx_twist_t){.w_pt = m->seg.dir * budget};
 				return;
@@ -969,16 +992,11 @@ static void path_tick(motion_t *m, fx_twist_t *out)
 			}
 			break;
 		}
-		/* Piece complete: land exactly on its end. A corner's end is where
-		 * its integration arrives (within a micrometre of the planned exit),
-		 * so no position step appears; the next line aims from there. */
-		if (m->seg.kind == SEG_CORNER) {
-			piece_advance(m, m->seg.len);
-			m->ref.th_deg = m->seg.p_end.th_deg;
-		} else {
-			m->ref = m->seg.p_end;
-		}
+		/* Piece complete: land exactly on its end (a corner's integration
+		 * arrives within nanometres of its planned exit). */
+		m->ref = m->seg.p_end;
 		budget -= rem;
+		moved += rem;
 		uint8_t kind = m->seg.kind;
 		m->seg.kind = SEG_NONE;
 		if (!blends_onward(m, kind)) {
@@ -988,6 +1006,15 @@ static void path_tick(motion_t *m, fx_twist_t *out)
 		}
 		if (budget == 0)
 			break;
+	}
+	if (along && m->p.kin == MOTION_KIN_DIFF) {
+		/* The path length at the step's heading change; the odometry
+		 * integrates it at the midpoint heading, as the corner's own
+		 * integration does. Lines here all run the same way: only cruise
+		 * lines blend, and they run forward. */
+		*out = (fx_twist_t){.vx_pt = dir * moved,
+				    .w_pt = fx_wrap_deg(m->ref.th_deg - start.th_deg)};
+		return;
 	}
 	twist_between(m, &start, &m->ref, out);
 }

@@ -68,6 +68,8 @@ typedef struct {
 	q32_t sx_mm, sy_mm; /* CRUISE: start of the incoming line; ARC: centre, body frame */
 	q32_t vend_pt;	    /* CRUISE: planned speed through the corner */
 	q32_t line_mm;	    /* CRUISE: length of its straight part (cached) */
+	q32_t len_mm;	    /* CRUISE: start to target (valid with start_known) */
+	int32_t ux, uy;	    /* CRUISE: unit direction start to target, Q30 (idem) */
 	traj_corner_t corner;
 } motion_cmd_t;
 
@@ -121,6 +123,7 @@ typedef struct {
 	/* The active piece's speed cap, acceleration and stopping distance
 	 * beyond its end, valid while lim_ok (motion.c drops it on any change). */
 	q32_t lim_vmax, lim_a, lim_extra;
+	q32_t lim_cruise; /* lim_vmax plus its braking distance */
 	bool lim_ok;
 
 	/* Jog / joystick velocity target (body frame, per tick). */

@@ -647,7 +647,7 @@ void vehicle_tick(vehicle_t *v, uint32_t now_us)
 	supervise_inputs(v);
 	feed_joystick(v);
 
-	fx_twist_t cmd = {0, 0, 0};
+	fx_twist_t cmd;
 	motion_tick(&v->motion, &v->odom, &cmd);
 	if (!v->servo) {
 		/* Nothing may move with the servo off; the odometry still
@@ -656,10 +656,9 @@ void vehicle_tick(vehicle_t *v, uint32_t now_us)
 	}
 	v->cmd = cmd;
 
-	fx_twist_t delta = {0, 0, 0};
-	int64_t ferr = 0;
-	int32_t out[VS_MAX_AXES] = {0};
-	kin_step(&v->kin, &cmd, v->meas_counts, out, &delta, &ferr);
+	fx_twist_t delta;
+	int64_t ferr;
+	kin_step(&v->kin, &cmd, v->meas_counts, v->wheel_cps_q8, &delta, &ferr);
 	odom_integrate(&v->odom, &delta, &v->odom_trig);
 
 	if (v->servo && ferr > v->following_err_max_counts) {
@@ -672,7 +671,8 @@ void vehicle_tick(vehicle_t *v, uint32_t now_us)
 	}
 
 	for (uint8_t i = 0; i < v->naxes; i++) {
-		v->wheel_cps_q8[i] = v->servo ? out[i] : 0;
+		if (!v->servo)
+			v->wheel_cps_q8[i] = 0;
 		v->hal.ops->drive_set_velocity(v->hal.ctx, i, v->wheel_cps_q8[i]);
 	}
 	v->ticks++;
