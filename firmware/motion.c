@@ -9,6 +9,9 @@
 #define TINY_MM	       ((q32_t)4295)	 /* 1e-6 mm: below this a line has no length */
 #define TINY_DEG       ((q32_t)4295)	 /* 1e-6 deg */
 #define DEG_TO_RAD_Q32 ((q32_t)74961321) /* pi / 180 */
+/* Heading change below which a corner step turns its entry direction to
+ * first order (0.002 deg: 3.5e-5 rad, squared half below 2^-30). */
+#define CORNER_SMALL_DEG ((q32_t)8589935)
 
 static motion_cmd_t *q_at(motion_t *m, uint8_t i)
 {
@@ -64,7 +67,9 @@ void motion_set_accel(motion_t *m, q32_t at, q32_t ar)
 		m->a_t_pt2 = 1;
 	if (m->a_r_pt2 < 1)
 		m->a_r_pt2 = 1;
-	limits_changed(m);
+	/* Queued corner speeds follow the new braking rate (the corners'
+	 * shapes and rotation caps keep the rate they were planned with). */
+	backward_pass(m);
 }
 
 void motion_set_jog_timeout_ms(motion_t *m, uint32_t ms)
@@ -273,16 +278,13 @@ bool motion_circular_rel(motion_t *m, q32_t cx_mm, q32_t cy_mm, q32_t angle_deg)
 
 /* ---- cruise planning ------------------------------------------------- */
 
-static q32_t corner_cap(const motion_t *m, const motion_cmd_t *c)
+/* A corner's speed cap from its rotation rate and rotational acceleration
+ * (the translation limit, which caution can change, applies on top). */
+static q32_t corner_vrot(const motion_t *m, const motion_cmd_t *c)
 {
-	q32_t v = vt_eff(m);
 	q32_t vr = fx_mul(m->v_r_pt, c->corner.k_mm_deg);
 	vr -= vr / 100; /* 1 % margin: the step into the corner may carry one tick of a */
-	if (vr < v)
-		v = vr;
-	if (c->corner.vacc_pt < v)
-		v = c->corner.vacc_pt;
-	return v;
+	return fx_min64(vr, c->corner.vacc_pt);
 }
 
 /* A cruise command's line geometry, once its start is known: the square
@@ -319,7 +321,8 @@ static q32_t cruise_line_len(motion_t *m, uint8_t i)
 }
 
 /* Lower each corner's speed so the unit can brake to the next corner's speed
- * on the line between, and to a stop at the last waypoint. */
+ * on the line between, and to a stop at the last waypoint; and keep, per
+ * corner, what the tick needs when its line or the corner begins. */
 static void backward_pass(motion_t *m)
 {
 	q32_t next_v = 0;
@@ -337,14 +340,24 @@ static void backward_pass(motion_t *m)
 				c->vend_pt = 0;
 			continue;
 		}
-		q32_t v = corner_cap(m, c);
+		c->corner_vrot_pt = corner_vrot(m, c);
+		/* A collinear pass (no corner piece) brakes at the line's rate. */
+		c->corner_a_pt2 = fx_max64(c->corner.lh_mm > 0
+					       ? fx_min64(m->a_t_pt2, c->corner.acc_pt2)
+					       : m->a_t_pt2,
+					   1);
+		c->corner_extra_mm = 0;
+		q32_t v = fx_min64(vt_eff(m), c->corner_vrot_pt);
 		if ((uint8_t)(i + 1) < m->q_count) {
-			q32_t reach =
-			    traj_reach(q_at(m, (uint8_t)(i + 1))->line_mm, next_v, m->a_t_pt2);
+			q32_t after = q_at(m, (uint8_t)(i + 1))->line_mm;
+			q32_t reach = traj_reach(after, next_v, m->a_t_pt2);
 			if (reach < v)
 				v = reach;
+			c->corner_extra_mm =
+			    after + traj_brake_dist(next_v, c->corner_a_pt2) + next_v;
 		}
 		c->vend_pt = v;
+		c->line_extra_mm = traj_brake_dist(v, fx_max64(m->a_t_pt2, 1)) + v;
 		next_v = v;
 	}
 }
@@ -578,16 +591,28 @@ static void seg_turn(motion_t *m, q32_t angle)
  * queued, to its corner's entry or its waypoint. The length is measured
  * along that direction: no square root or division in the tick that blends
  * into it. The heading is already along the line (turn or corner before). */
-static void cruise_line(motion_t *m, const motion_cmd_t *c)
+/* A blended piece (cruise line or corner) from the reference, forward along
+ * the unit direction (ux, uy). Only the fields these kinds read are set:
+ * clearing the whole piece costs more than the rest of its setup. */
+static seg_t *seg_blended(motion_t *m, uint8_t kind, int32_t ux, int32_t uy)
 {
 	seg_t *g = &m->seg;
-	const fx_pose_t *r = &m->ref;
-	*g = (seg_t){0};
-	g->kind = SEG_LINE;
+	g->kind = kind;
 	g->dir = 1;
-	g->p0 = *r;
-	g->ux = c->ux;
-	g->uy = c->uy;
+	g->s = 0;
+	g->p0 = m->ref;
+	g->ux = ux;
+	g->uy = uy;
+	g->dth = 0;
+	g->h = 0;
+	g->cx = g->cy = 0;
+	return g;
+}
+
+static void cruise_line(motion_t *m, const motion_cmd_t *c)
+{
+	const fx_pose_t *r = &m->ref;
+	seg_t *g = seg_blended(m, SEG_LINE, c->ux, c->uy);
 	q32_t t = c->has_corner ? c->corner.t_mm : 0;
 	g->p_end.x_mm = c->target.x_mm - fx_mul_q30(t, c->ux);
 	g->p_end.y_mm = c->target.y_mm - fx_mul_q30(t, c->uy);
@@ -726,13 +751,7 @@ static bool next_piece(motion_t *m)
 				if (!c->has_corner || c->corner.lh_mm == 0 || m->q_count < 2)
 					continue;
 				const motion_cmd_t *n = q_at(m, 1);
-				seg_t *g = &m->seg;
-				*g = (seg_t){0};
-				g->kind = SEG_CORNER;
-				g->dir = 1;
-				g->p0 = *r;
-				g->ux = c->ux;
-				g->uy = c->uy;
+				seg_t *g = seg_blended(m, SEG_CORNER, c->ux, c->uy);
 				g->corner = c->corner;
 				g->len = 2 * c->corner.lh_mm;
 				/* Exit: the waypoint plus the tangent length along the next
@@ -778,10 +797,12 @@ static void piece_limits(const motion_t *m, q32_t *vmax, q32_t *a)
 			*a = fx_min64(*a, ar - (ar >> 12));
 		}
 		break;
-	case SEG_CORNER:
-		*vmax = corner_cap(m, q_at((motion_t *)m, 0));
-		*a = fx_min64(m->a_t_pt2, g->corner.acc_pt2);
+	case SEG_CORNER: {
+		const motion_cmd_t *c = q_at((motion_t *)m, 0);
+		*vmax = fx_min64(vt_eff(m), c->corner_vrot_pt);
+		*a = c->corner_a_pt2;
 		break;
+	}
 	default:
 		*vmax = 0;
 		*a = m->a_t_pt2;
@@ -792,7 +813,7 @@ static void piece_limits(const motion_t *m, q32_t *vmax, q32_t *a)
 
 /* Distance beyond the active piece's end that the profile may count on
  * to stop within: a blended corner's virtual stop (traj.h). */
-static q32_t piece_horizon_extra(motion_t *m, q32_t a)
+static q32_t piece_horizon_extra(motion_t *m)
 {
 	const seg_t *g = &m->seg;
 	if (m->q_count == 0)
@@ -800,13 +821,12 @@ static q32_t piece_horizon_extra(motion_t *m, q32_t a)
 	motion_cmd_t *c = q_at(m, 0);
 	if (c->kind != MCMD_CRUISE || !c->has_corner)
 		return 0;
+	/* Both planned by the backward pass, with the rates piece_limits gives
+	 * these pieces. */
 	if (g->kind == SEG_LINE)
-		return traj_brake_dist(c->vend_pt, a) + c->vend_pt;
-	if (g->kind == SEG_CORNER && m->q_count >= 2) {
-		motion_cmd_t *n = q_at(m, 1);
-		q32_t nv = (n->kind == MCMD_CRUISE && n->has_corner) ? n->vend_pt : 0;
-		return n->line_mm + traj_brake_dist(nv, a) + nv;
-	}
+		return c->line_extra_mm;
+	if (g->kind == SEG_CORNER)
+		return c->corner_extra_mm;
 	return 0;
 }
 
@@ -862,7 +882,16 @@ static void piece_advance(motion_t *m, q32_t s)
 		}
 		g->h = h1;
 		int32_t sn, cs;
-		fx_sincos_bam(fx_deg_to_bam(g->p0.th_deg + hm), &sn, &cs);
+		if (hm < CORNER_SMALL_DEG && hm > -CORNER_SMALL_DEG) {
+			/* Entering (the step that blends in from the line): the
+			 * entry direction turned by hm to first order; the error,
+			 * hm^2 / 2 in radians, is below the Q30 resolution. */
+			int64_t r30 = fx_mul_fit(hm, DEG_TO_RAD_Q32) >> 2;
+			cs = g->ux - (int32_t)((g->uy * r30) >> 30);
+			sn = g->uy + (int32_t)((g->ux * r30) >> 30);
+		} else {
+			fx_sincos_bam(fx_deg_to_bam(g->p0.th_deg + hm), &sn, &cs);
+		}
 		out->x_mm += fx_mul_q30(ds, cs);
 		out->y_mm += fx_mul_q30(ds, sn);
 		out->th_deg = fx_wrap_deg(g->p0.th_deg + h1);
@@ -935,16 +964,25 @@ static void path_tick(motion_t *m, fx_twist_t *out)
 		if (budget < 0) {
 			if (!m->lim_ok) {
 				piece_limits(m, &m->lim_vmax, &m->lim_a);
-				m->lim_extra = piece_horizon_extra(m, m->lim_a);
-				m->lim_cruise = m->lim_vmax + traj_brake_dist(m->lim_vmax, m->lim_a);
+				m->lim_extra = piece_horizon_extra(m);
+				m->lim_cruise = -1;
+				m->lim_n = -1;
 				m->lim_ok = true;
 			}
 			q32_t d = m->seg.len - m->seg.s + m->lim_extra;
-			/* At the cap with room to stop from it, traj_step keeps the
-			 * speed: skip it (its braking distance has a division). */
-			q32_t u = m->v == m->lim_vmax && d >= m->lim_cruise
-				      ? m->v
-				      : traj_step(m->v, d, m->lim_vmax, m->lim_a);
+			q32_t u;
+			if (m->v == m->lim_vmax) {
+				/* At the cap with room to stop from it, traj_step keeps
+				 * the speed: skip it (its braking distance divides). */
+				if (m->lim_cruise < 0)
+					m->lim_cruise =
+					    m->lim_vmax + traj_brake_dist(m->lim_vmax, m->lim_a);
+				u = d >= m->lim_cruise ? m->v
+						       : traj_step_near(m->v, d, m->lim_vmax,
+									m->lim_a, &m->lim_n);
+			} else {
+				u = traj_step_near(m->v, d, m->lim_vmax, m->lim_a, &m->lim_n);
+			}
 			if (braking) {
 				/* Stop at the acceleration limit, along the path. */
 				q32_t amax = m->amax_t_pt2;

@@ -70,6 +70,11 @@ typedef struct {
 	q32_t line_mm;	    /* CRUISE: length of its straight part (cached) */
 	q32_t len_mm;	    /* CRUISE: start to target (valid with start_known) */
 	int32_t ux, uy;	    /* CRUISE: unit direction start to target, Q30 (idem) */
+	/* CRUISE with a corner, planned by the backward pass: the corner's speed
+	 * cap from rotation (before the translation limit), its acceleration,
+	 * and the stopping distance counted beyond the end of the line and of
+	 * the corner (traj.h: a speed cap ahead is a virtual stop further on). */
+	q32_t corner_vrot_pt, corner_a_pt2, line_extra_mm, corner_extra_mm;
 	traj_corner_t corner;
 } motion_cmd_t;
 
@@ -123,7 +128,8 @@ typedef struct {
 	/* The active piece's speed cap, acceleration and stopping distance
 	 * beyond its end, valid while lim_ok (motion.c drops it on any change). */
 	q32_t lim_vmax, lim_a, lim_extra;
-	q32_t lim_cruise; /* lim_vmax plus its braking distance */
+	q32_t lim_cruise; /* lim_vmax plus its braking distance (-1: not yet) */
+	int64_t lim_n;	  /* the profile's last braking step count (traj_step_near) */
 	bool lim_ok;
 
 	/* Jog / joystick velocity target (body frame, per tick). */

@@ -20,32 +20,55 @@ static q32_t g_of(q32_t u, q32_t a)
 	return u + traj_brake_dist(u, a);
 }
 
-q32_t traj_umax(q32_t d, q32_t a)
+q32_t traj_umax_near(q32_t d, q32_t a, int64_t *n_guess)
 {
 	if (d <= 0)
 		return 0;
 	if (a <= 0)
 		return d;
-	/* n ~ sqrt(2 d / a), then correct by whole steps. */
-	uint64_t q = (uint64_t)(d / a);
-	int64_t n = (int64_t)fx_isqrt64(2 * q);
-	while (n > 0 && tri(n, a) > d)
-		n--;
-	while (tri(n + 1, a) <= d)
-		n++;
+	int64_t n = *n_guess;
+	if (n >= 1 && tri(n, a) > d && tri(n - 1, a) <= d) {
+		n--; /* braking: one step fewer than the tick before */
+	} else if (n < 0 || tri(n, a) > d || tri(n + 1, a) <= d) {
+		/* n ~ sqrt(2 d / a), then correct by whole steps. */
+		uint64_t q = (uint64_t)(d / a);
+		n = (int64_t)fx_isqrt64(2 * q);
+		while (n > 0 && tri(n, a) > d)
+			n--;
+		while (tri(n + 1, a) <= d)
+			n++;
+	}
+	*n_guess = n;
 	return (d + tri(n, a)) / (n + 1);
 }
 
+q32_t traj_umax(q32_t d, q32_t a)
+{
+	int64_t n = -1;
+	return traj_umax_near(d, a, &n);
+}
+
 q32_t traj_step(q32_t v, q32_t d, q32_t vmax, q32_t a)
+{
+	int64_t n = -1;
+	return traj_step_near(v, d, vmax, a, &n);
+}
+
+q32_t traj_step_near(q32_t v, q32_t d, q32_t vmax, q32_t a, int64_t *n_guess)
 {
 	q32_t cand = v + a;
 	if (cand > vmax)
 		cand = fx_max64(vmax, v - a);
 	if (cand < 0)
 		cand = 0;
-	if (g_of(cand, a) <= d)
+	/* G is increasing, so G(cand) <= d exactly when cand <= Umax(d). Not
+	 * braking, G(cand) is the cheaper test; braking (a step count kept),
+	 * Umax is needed anyway and decides alone. */
+	if (*n_guess < 0 && g_of(cand, a) <= d)
 		return cand;
-	q32_t u = traj_umax(d, a);
+	q32_t u = traj_umax_near(d, a, n_guess);
+	if (cand <= u)
+		return cand;
 	/* The invariant keeps u >= v - a unless the limits were lowered under
 	 * the unit; braking harder than a is never chosen. */
 	if (u < v - a)

@@ -62,6 +62,12 @@ q32_t traj_umax(q32_t d, q32_t a);
 /* Next speed along a path with d remaining (d >= 0), current speed v,
  * cap vmax, acceleration a. */
 q32_t traj_step(q32_t v, q32_t d, q32_t vmax, q32_t a);
+/* The same results, given a guess of Umax's step count n (the largest with
+ * T(n) <= d), which they update: while braking, n falls by one a tick, so
+ * last tick's count replaces the square root. Any other guess (-1: none)
+ * falls back to the full search. Keep the guess for one a only. */
+q32_t traj_umax_near(q32_t d, q32_t a, int64_t *n_guess);
+q32_t traj_step_near(q32_t v, q32_t d, q32_t vmax, q32_t a, int64_t *n_guess);
 /* Largest speed from which braking at a reaches at most c within d. */
 q32_t traj_reach(q32_t d, q32_t c, q32_t a);
 

@@ -496,9 +496,30 @@ static inline void supervise_encoder(vehicle_t *v, uint8_t i, bool moved)
 		encoder_stuck(v, i);
 }
 
-static void sample_drives(vehicle_t *v)
+/* Reports are out of line (cold): their text buffers and calls stay off
+ * the every-tick path. */
+#define COLD __attribute__((cold, noinline))
+
+static COLD void drive_silent_report(vehicle_t *v, uint8_t i)
 {
 	char s[VS_ALARM_SOURCE_MAX];
+	v->drive_timeout_reported[i] = true;
+	axis_text(s, sizeof s, "drive ", i, " not answering");
+	raise_fault(v, ALM_F_DRIVE_TIMEOUT, s);
+}
+
+static COLD void drive_fault_report(vehicle_t *v, uint8_t i, uint16_t fc)
+{
+	char s[VS_ALARM_SOURCE_MAX];
+	size_t pos = put_str(s, sizeof s, 0, "drive ");
+	pos = put_dec(s, sizeof s, pos, i, 1);
+	pos = put_str(s, sizeof s, pos, " fault ");
+	put_hex4(s, sizeof s, pos, fc);
+	raise_fault(v, ALM_F_DRIVE, s);
+}
+
+static void sample_drives(vehicle_t *v)
+{
 	/* Each drive's condition is reported once per occurrence (and again
 	 * after clearAlarm while it persists), so two faulted drives do not
 	 * take turns at the front of the list every tick. */
@@ -509,11 +530,8 @@ static void sample_drives(vehicle_t *v)
 			if (v->powered && v->drive_silent_ticks[i] < UINT32_MAX)
 				v->drive_silent_ticks[i]++;
 			if (v->powered && v->drive_silent_ticks[i] > v->drive_timeout_ticks &&
-			    !v->drive_timeout_reported[i]) {
-				v->drive_timeout_reported[i] = true;
-				axis_text(s, sizeof s, "drive ", i, " not answering");
-				raise_fault(v, ALM_F_DRIVE_TIMEOUT, s);
-			}
+			    !v->drive_timeout_reported[i])
+				drive_silent_report(v, i);
 			supervise_encoder(v, i, false);
 			continue;
 		}
@@ -523,22 +541,28 @@ static void sample_drives(vehicle_t *v)
 		supervise_encoder(v, i, st.position_counts != v->meas_counts[i]);
 		v->meas_counts[i] = st.position_counts;
 		uint16_t fc = v->powered ? st.fault_code : 0;
-		if (fc != 0 && fc != v->drive_fault_reported[i]) {
-			size_t pos = put_str(s, sizeof s, 0, "drive ");
-			pos = put_dec(s, sizeof s, pos, i, 1);
-			pos = put_str(s, sizeof s, pos, " fault ");
-			put_hex4(s, sizeof s, pos, fc);
-			raise_fault(v, ALM_F_DRIVE, s);
-		}
+		if (fc != 0 && fc != v->drive_fault_reported[i])
+			drive_fault_report(v, i, fc);
 		v->drive_fault_reported[i] = fc;
 	}
+}
+
+/* "battery below N.N V" as a fault (critical) or a warning (low). */
+static COLD void battery_report(vehicle_t *v, uint32_t code, uint32_t mv)
+{
+	char s[VS_ALARM_SOURCE_MAX];
+	size_t pos = put_str(s, sizeof s, 0, "battery below ");
+	put_volts(s, sizeof s, pos, mv);
+	if (code == ALM_F_BATTERY_CRITICAL)
+		raise_fault_level(v, code, s);
+	else
+		alarm_raise(&v->alarms, code, s);
 }
 
 static void supervise_inputs(vehicle_t *v)
 {
 	const vs_hal_ops_t *o = v->hal.ops;
 	void *c = v->hal.ctx;
-	char s[VS_ALARM_SOURCE_MAX];
 
 	if (v->cfg.has_estop && o->estop(c))
 		raise_fault_level(v, ALM_F_ESTOP, "emergency stop");
@@ -553,18 +577,13 @@ static void supervise_inputs(vehicle_t *v)
 	}
 
 	v->battery_mv = o->battery_mv(c);
-	if (v->battery_mv < v->battery_critical_mv) {
-		size_t pos = put_str(s, sizeof s, 0, "battery below ");
-		put_volts(s, sizeof s, pos, v->battery_critical_mv);
-		raise_fault_level(v, ALM_F_BATTERY_CRITICAL, s);
-	}
+	if (v->battery_mv < v->battery_critical_mv)
+		battery_report(v, ALM_F_BATTERY_CRITICAL, v->battery_critical_mv);
 	/* Warn once per crossing; 0.1 V of hysteresis keeps noise from
 	 * repeating it. */
 	if (v->battery_low_armed && v->battery_mv < v->battery_low_mv) {
 		v->battery_low_armed = false;
-		size_t pos = put_str(s, sizeof s, 0, "battery below ");
-		put_volts(s, sizeof s, pos, v->battery_low_mv);
-		alarm_raise(&v->alarms, ALM_W_BATTERY_LOW, s);
+		battery_report(v, ALM_W_BATTERY_LOW, v->battery_low_mv);
 	} else if (v->battery_mv >= v->battery_low_mv + 100u) {
 		v->battery_low_armed = true;
 	}
@@ -640,6 +659,15 @@ static void feed_joystick(vehicle_t *v)
 	motion_joystick_input(&v->motion, x, y, r, true);
 }
 
+static COLD void following_fault(vehicle_t *v, int64_t ferr)
+{
+	char s[VS_ALARM_SOURCE_MAX];
+	size_t pos = put_str(s, sizeof s, 0, "following error ");
+	pos = put_dec(s, sizeof s, pos, (uint32_t)(ferr > UINT32_MAX ? UINT32_MAX : ferr), 1);
+	put_str(s, sizeof s, pos, " counts");
+	raise_fault(v, ALM_F_FOLLOWING, s);
+}
+
 void vehicle_tick(vehicle_t *v, uint32_t now_us)
 {
 	check_overrun(v, now_us);
@@ -661,14 +689,8 @@ void vehicle_tick(vehicle_t *v, uint32_t now_us)
 	kin_step(&v->kin, &cmd, v->meas_counts, v->wheel_cps_q8, &delta, &ferr);
 	odom_integrate(&v->odom, &delta, &v->odom_trig);
 
-	if (v->servo && ferr > v->following_err_max_counts) {
-		char s[VS_ALARM_SOURCE_MAX];
-		size_t pos = put_str(s, sizeof s, 0, "following error ");
-		pos =
-		    put_dec(s, sizeof s, pos, (uint32_t)(ferr > UINT32_MAX ? UINT32_MAX : ferr), 1);
-		put_str(s, sizeof s, pos, " counts");
-		raise_fault(v, ALM_F_FOLLOWING, s);
-	}
+	if (v->servo && ferr > v->following_err_max_counts)
+		following_fault(v, ferr);
 
 	for (uint8_t i = 0; i < v->naxes; i++) {
 		if (!v->servo)

@@ -50,6 +50,7 @@ int main(void)
 			 * sees it. */
 			done = now;
 			vehicle_tick(&unit, done * period_us);
+			loop_hal_step(&plant);
 			continue;
 		}
 		link_poll(&lnk, done * period_us / 1000u);

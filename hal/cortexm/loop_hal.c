@@ -1,17 +1,27 @@
 /* Loopback plant (see loop_hal.h). */
 #include "loop_hal.h"
 
+/* A drive takes its setpoint; the wheel moves when the world steps. */
 static void l_set_velocity(void *ctx, uint8_t axis, int32_t cps_q8)
 {
 	loop_hal_t *h = ctx;
-	if (axis >= LOOP_HAL_AXES || !h->relay || !h->enabled[axis])
-		return;
-	/* One period at cps_q8 / 256 counts per second; keep the remainder so
-	 * that nothing is lost to rounding. */
+	if (axis < LOOP_HAL_AXES)
+		h->cps_q8[axis] = cps_q8;
+}
+
+void loop_hal_step(loop_hal_t *h)
+{
+	/* One period at cps_q8 / 256 counts per second for each enabled drive;
+	 * keep the remainder so that nothing is lost to rounding. */
 	int64_t unit = 256 * (int64_t)h->tick_hz;
-	int64_t acc = h->rem[axis] + cps_q8;
-	h->counts[axis] = (int32_t)((uint32_t)h->counts[axis] + (uint32_t)(int32_t)(acc / unit));
-	h->rem[axis] = acc % unit;
+	for (uint8_t axis = 0; axis < LOOP_HAL_AXES; axis++) {
+		if (!h->relay || !h->enabled[axis])
+			continue;
+		int64_t acc = h->rem[axis] + h->cps_q8[axis];
+		h->counts[axis] =
+		    (int32_t)((uint32_t)h->counts[axis] + (uint32_t)(int32_t)(acc / unit));
+		h->rem[axis] = acc % unit;
+	}
 }
 
 static void l_enable(void *ctx, uint8_t axis, bool on)

@@ -36,10 +36,16 @@ void rig_init(rig_t *r)
 	rig_tick(r);
 }
 
-void rig_tick(rig_t *r)
+void rig_tick_firmware(rig_t *r)
 {
 	r->now_us += 1000000u / r->cfg.tick_hz;
 	vehicle_tick(&r->v, r->now_us);
+}
+
+void rig_tick(rig_t *r)
+{
+	rig_tick_firmware(r);
+	loop_hal_step(&r->plant);
 }
 
 uint32_t rig_run_idle(rig_t *r, uint32_t max)

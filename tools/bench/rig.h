@@ -18,8 +18,10 @@ typedef struct {
 
 /* Reference configuration (vs_config_defaults); exits on failure. */
 void rig_init(rig_t *r);
-/* One control period. */
+/* One control period: the firmware's tick, then the plant's step. */
 void rig_tick(rig_t *r);
+/* The firmware's tick alone (what the benchmarks measure). */
+void rig_tick_firmware(rig_t *r);
 /* Ticks until the unit has no motion work left; returns the ticks run, or
  * exits when max is reached. */
 uint32_t rig_run_idle(rig_t *r, uint32_t max);
