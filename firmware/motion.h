@@ -119,6 +119,7 @@ typedef struct {
 	bool paused;	/* held by pause (decelerating or stopped) */
 	bool stopping;	/* stop(): decelerating, then discard */
 	bool joystick;	/* joystick enabled */
+	bool lim_ok;	/* lim_* below hold for the active piece */
 
 	motion_cmd_t q[MOTION_QUEUE_LEN];
 	uint8_t q_head, q_count;
@@ -130,7 +131,6 @@ typedef struct {
 	q32_t lim_vmax, lim_a, lim_extra;
 	q32_t lim_cruise; /* lim_vmax plus its braking distance (-1: not yet) */
 	int64_t lim_n;	  /* the profile's last braking step count (traj_step_near) */
-	bool lim_ok;
 
 	/* Jog / joystick velocity target (body frame, per tick). */
 	fx_twist_t vtarget;

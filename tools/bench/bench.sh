@@ -21,7 +21,7 @@ awk '
 	$1 == "cruise" && $2 == "tick" {
 		printf "  target: <= 1000 per whole tick in the blended cruise: mean %s, median %s, p99 %s, max %s -> %s\n", $6, $8, $14, $12, ($12 <= 1000 ? "met on every tick" : ($6 <= 1000 ? "met on average" : "missed"))
 		if ($12 > 1000)
-			printf "          %s of the ticks cost more than 1000 (corner ticks evaluate the clothoid and integrate the midpoint heading; the\n          most expensive plan the next line and corner as the previous piece ends)\n", $16
+			printf "          %s of the ticks cost more than 1000: those in which a line blends into its corner (the line'"'"'s last\n          braking step, the corner'"'"'s setup and first step, and the odometry'"'"'s sine and cosine in one tick)\n", $16
 	}
 	$1 == "retarget" && $2 == "cmd" { c = $12 }
 	$1 == "retarget" && $2 == "tick-after-cmd" { t = $12 }

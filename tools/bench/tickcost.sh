@@ -24,7 +24,7 @@ for sc in "$@"; do
 			for (l in n) {
 				med = v[l, int((n[l] + 1) / 2)]
 				p99 = v[l, int((n[l] * 99 + 99) / 100)]
-				printf "  %-9s %-15s %6d calls  mean %6.0f  median %6d  min %6d  max %6d  p99 %6d  over1000 %5.1f%%\n",
+				printf "  %-9s %-15s %6d calls  mean %6.0f  median %6d  min %6d  max %6d  p99 %6d  over1000 %5.2f%%\n",
 					sc, l, n[l], s[l] / n[l], med, v[l, 1], v[l, n[l]], p99, 100 * over[l] / n[l]
 			}
 		}' "$tmp/costs" | sort
