@@ -46,6 +46,16 @@
  * A backward pass over the queued waypoints lowers each corner's speed so
  * that the unit can always brake to the next corner's speed and to a stop
  * at the last waypoint.
+ * The engine integrates the reference through a corner at each step's
+ * midpoint heading; with the heading exact, the integration arrives within
+ * nanometres of the exit T beyond the waypoint, and the corner ends on that
+ * exit, so the next line is the one planned when it was queued.
+ *
+ * 3. Braking cost
+ *
+ * While braking, Umax(d) is taken each tick at a distance that shrinks by
+ * about u = n a, so its n falls by one a tick: starting from the last
+ * tick's n, two products confirm it and the square root is not needed.
  */
 #ifndef TRAJ_H
 #define TRAJ_H
