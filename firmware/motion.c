@@ -55,7 +55,6 @@ void motion_set_velocity(motion_t *m, q32_t vt, q32_t vr)
 	m->v_t_pt = vt / m->p.tick_hz;
 	m->v_r_pt = vr / m->p.tick_hz;
 	backward_pass(m);
-	limits_changed(m);
 }
 
 void motion_set_accel(motion_t *m, q32_t at, q32_t ar)
@@ -287,6 +286,20 @@ static q32_t corner_vrot(const motion_t *m, const motion_cmd_t *c)
 	return fx_min64(vr, c->corner.vacc_pt);
 }
 
+/* Length of (dx, dy) and its unit direction in Q30 (0, 0 for no length).
+ * Out of line: it runs when a command is queued or a piece starts, and
+ * inlined it cost the steady cruise tick 5 instructions (measured). */
+static __attribute__((noinline)) q32_t unit_dir(q32_t dx, q32_t dy, int32_t *ux, int32_t *uy)
+{
+	q32_t len = fx_hypot(dx, dy);
+	*ux = *uy = 0;
+	if (len > 0) {
+		*ux = (int32_t)(fx_div(dx, len) >> 2);
+		*uy = (int32_t)(fx_div(dy, len) >> 2);
+	}
+	return len;
+}
+
 /* A cruise command's line geometry, once its start is known: the square
  * root and divisions are paid when it is queued, not in the tick that
  * blends into it. */
@@ -295,13 +308,7 @@ static void cruise_set_start(motion_cmd_t *c, q32_t sx, q32_t sy)
 	c->sx_mm = sx;
 	c->sy_mm = sy;
 	c->start_known = true;
-	q32_t dx = c->target.x_mm - sx, dy = c->target.y_mm - sy;
-	c->len_mm = fx_hypot(dx, dy);
-	c->ux = c->uy = 0;
-	if (c->len_mm > 0) {
-		c->ux = (int32_t)(fx_div(dx, c->len_mm) >> 2);
-		c->uy = (int32_t)(fx_div(dy, c->len_mm) >> 2);
-	}
+	c->len_mm = unit_dir(c->target.x_mm - sx, c->target.y_mm - sy, &c->ux, &c->uy);
 }
 
 /* Length of cruise command i's straight part: from the previous corner's
@@ -555,12 +562,7 @@ static void seg_line(motion_t *m, const fx_pose_t *from, q32_t tx, q32_t ty, q32
 	*g = (seg_t){0};
 	g->kind = SEG_LINE;
 	g->p0 = *from;
-	q32_t dx = tx - from->x_mm, dy = ty - from->y_mm;
-	g->len = fx_hypot(dx, dy);
-	if (g->len > 0) {
-		g->ux = (int32_t)(fx_div(dx, g->len) >> 2);
-		g->uy = (int32_t)(fx_div(dy, g->len) >> 2);
-	}
+	g->len = unit_dir(tx - from->x_mm, ty - from->y_mm, &g->ux, &g->uy);
 	g->p_end.x_mm = tx;
 	g->p_end.y_mm = ty;
 	/* Travel sign relative to the heading (moveForward may go backward). */
@@ -586,11 +588,6 @@ static void seg_turn(motion_t *m, q32_t angle)
 	g->p_end.th_deg = fx_wrap_deg(m->ref.th_deg + angle);
 }
 
-/* The straight part of cruise command c, from the reference (its start, or
- * the previous corner's exit) along the direction planned when it was
- * queued, to its corner's entry or its waypoint. The length is measured
- * along that direction: no square root or division in the tick that blends
- * into it. The heading is already along the line (turn or corner before). */
 /* A blended piece (cruise line or corner) from the reference, forward along
  * the unit direction (ux, uy). Only the fields these kinds read are set:
  * clearing the whole piece costs more than the rest of its setup. */
@@ -609,6 +606,11 @@ static seg_t *seg_blended(motion_t *m, uint8_t kind, int32_t ux, int32_t uy)
 	return g;
 }
 
+/* The straight part of cruise command c, from the reference (its start, or
+ * the previous corner's exit) along the direction planned when it was
+ * queued, to its corner's entry or its waypoint. The length is measured
+ * along that direction: no square root or division in the tick that blends
+ * into it. The heading is already along the line (turn or corner before). */
 static void cruise_line(motion_t *m, const motion_cmd_t *c)
 {
 	const fx_pose_t *r = &m->ref;

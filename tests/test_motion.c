@@ -349,6 +349,31 @@ static void test_limits_change_mid_piece(void **state)
 }
 
 
+/* A lower acceleration set while paused, before queued cruise waypoints
+ * start, re-plans their corner speeds: the unit still brakes at the new
+ * rate into a short last leg. */
+static void test_accel_lowered_while_paused(void **state)
+{
+	(void)state;
+	rig_t r;
+	rig_init(&r, MOTION_KIN_DIFF);
+	motion_pause(&r.m);
+	assert_true(motion_cruise_abs(&r.m, q(1000), 0));
+	/* A 20 degree turn onto a 300 mm leg: the corner speed is set by
+	 * braking to a stop on that leg, not by the rotation limits. */
+	assert_true(motion_cruise_abs(&r.m, q(1282), q(103)));
+	motion_set_accel(&r.m, q(100), q(180));
+	for (int i = 0; i < 10; i++)
+		rig_tick(&r);
+	assert_int_equal(r.m.ref.x_mm, 0);
+	motion_resume(&r.m);
+	run_until_idle(&r, 60000);
+	assert_int_equal(r.m.ref.x_mm, q(1282));
+	assert_int_equal(r.m.ref.y_mm, q(103));
+	assert_true(r.ax_max <= 100.0 * 1.00001);
+}
+
+
 /* Redefining the pose mid-move keeps the motion's physical course: no
  * velocity step, and the end lands where it would have, in the new frame. */
 static void test_set_pose_while_moving(void **state)
@@ -452,6 +477,7 @@ int main(void)
 		cmocka_unit_test(test_omni_modes),
 		cmocka_unit_test(test_set_pose_during_arc),
 		cmocka_unit_test(test_limits_change_mid_piece),
+		cmocka_unit_test(test_accel_lowered_while_paused),
 	};
 	return cmocka_run_group_tests_name("motion", tests, NULL, NULL);
 }
