@@ -133,6 +133,18 @@ void fx_sincos_bam(uint32_t bam, int32_t *s, int32_t *c)
 	}
 }
 
+q32_t fx_wrap_deg_any(q32_t deg)
+{
+	/* The remainder has the sign of deg and is under a turn: no overflow
+	 * for any input. */
+	q32_t r = deg % FX_DEG_360;
+	if (r >= FX_DEG_180)
+		r -= FX_DEG_360;
+	else if (r < -FX_DEG_180)
+		r += FX_DEG_360;
+	return r;
+}
+
 /* atan(2^-i) in Q32 degrees. */
 static const int64_t cordic_atan_deg[32] = {
     193273528320, 114096026022, 60285206653, 30601712202, 15360239180, 7687607525, 3844741810,

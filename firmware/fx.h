@@ -115,15 +115,20 @@ static inline q32_t fx_mul_fit(q32_t a, q32_t b)
 #endif
 }
 
+/* fx_wrap_deg more than a turn out of range (a division). */
+q32_t fx_wrap_deg_any(q32_t deg);
+
 /* Wrap a Q32 angle in degrees into [-180, 180). */
 static inline q32_t fx_wrap_deg(q32_t deg)
 {
 	if (deg >= -FX_DEG_180 && deg < FX_DEG_180)
 		return deg;
-	q32_t r = (deg + FX_DEG_180) % FX_DEG_360;
-	if (r < 0)
-		r += FX_DEG_360;
-	return r - FX_DEG_180;
+	/* A sum of two wrapped angles is at most a turn out: no division. */
+	if (deg >= FX_DEG_180 && deg < FX_DEG_180 + FX_DEG_360)
+		return deg - FX_DEG_360;
+	if (deg < -FX_DEG_180 && deg >= -FX_DEG_180 - FX_DEG_360)
+		return deg + FX_DEG_360;
+	return fx_wrap_deg_any(deg);
 }
 
 /* Degrees (Q32) to binary angle, modulo one turn. */

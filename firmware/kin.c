@@ -143,5 +143,6 @@ void odom_integrate(fx_pose_t *pose, const fx_twist_t *d, fx_trig_cache_t *tc)
 		pose->x_mm -= fx_mul_q30(d->vy_pt, s);
 		pose->y_mm += fx_mul_q30(d->vy_pt, c);
 	}
-	pose->th_deg = fx_wrap_deg(pose->th_deg + d->w_pt);
+	if (d->w_pt != 0)
+		pose->th_deg = fx_wrap_deg(pose->th_deg + d->w_pt);
 }

@@ -123,6 +123,7 @@ void motion_set_pose(motion_t *m, const fx_pose_t *p)
 		map_point(&f, &c->cx_mm, &c->cy_mm);
 		if (c->kind == MCMD_CRUISE) {
 			map_point(&f, &c->sx_mm, &c->sy_mm);
+			map_point(&f, &c->exit_x_mm, &c->exit_y_mm);
 			map_dir(&f, &c->ux, &c->uy);
 		}
 	}
@@ -385,8 +386,8 @@ static void plan_corner(motion_t *m, uint8_t i)
 	motion_cmd_t *c = q_at(m, i), *n = q_at(m, (uint8_t)(i + 1));
 	if (c->kind != MCMD_CRUISE || n->kind != MCMD_CRUISE || !c->start_known || c->has_corner)
 		return;
-	/* The head command's stage 2 is its line running (next_piece): a
-	 * corner can still be fitted in what is left of it. */
+	/* The head command's stage 2 is its line running (next_piece), then
+	 * its corner: a corner can still be fitted in what is left of the line. */
 	if (i == 0 && (c->stage > 2 || (c->stage == 2 && m->seg.kind != SEG_LINE)))
 		return; /* already past its line */
 	q32_t inx = c->target.x_mm - c->sx_mm, iny = c->target.y_mm - c->sy_mm;
@@ -423,6 +424,11 @@ static void plan_corner(motion_t *m, uint8_t i)
 		return;
 	c->corner = corner;
 	c->has_corner = true;
+	/* Exit: the integration arrives there within nanometres (clothoid
+	 * heading exact, midpoint steps); the piece ends on it, so the next
+	 * line is the one planned. */
+	c->exit_x_mm = c->target.x_mm + fx_mul_q30(corner.t_mm, n->ux);
+	c->exit_y_mm = c->target.y_mm + fx_mul_q30(corner.t_mm, n->uy);
 	backward_pass(m);
 	if (executing) {
 		/* Can the unit still slow to the corner speed before it begins? */
@@ -588,24 +594,6 @@ static void seg_turn(motion_t *m, q32_t angle)
 	g->p_end.th_deg = fx_wrap_deg(m->ref.th_deg + angle);
 }
 
-/* A blended piece (cruise line or corner) from the reference, forward along
- * the unit direction (ux, uy). Only the fields these kinds read are set:
- * clearing the whole piece costs more than the rest of its setup. */
-static seg_t *seg_blended(motion_t *m, uint8_t kind, int32_t ux, int32_t uy)
-{
-	seg_t *g = &m->seg;
-	g->kind = kind;
-	g->dir = 1;
-	g->s = 0;
-	g->p0 = m->ref;
-	g->ux = ux;
-	g->uy = uy;
-	g->dth = 0;
-	g->h = 0;
-	g->cx = g->cy = 0;
-	return g;
-}
-
 /* The straight part of cruise command c, from the reference (its start, or
  * the previous corner's exit) along the direction planned when it was
  * queued, to its corner's entry or its waypoint. The length is measured
@@ -614,7 +602,17 @@ static seg_t *seg_blended(motion_t *m, uint8_t kind, int32_t ux, int32_t uy)
 static void cruise_line(motion_t *m, const motion_cmd_t *c)
 {
 	const fx_pose_t *r = &m->ref;
-	seg_t *g = seg_blended(m, SEG_LINE, c->ux, c->uy);
+	/* Only the fields a line or the corner after it reads are set: clearing
+	 * the whole piece costs more than the rest of its setup. */
+	seg_t *g = &m->seg;
+	g->kind = SEG_LINE;
+	g->dir = 1;
+	g->s = 0;
+	g->p0 = *r;
+	g->ux = c->ux;
+	g->uy = c->uy;
+	g->dth = 0;
+	g->cx = g->cy = 0;
 	q32_t t = c->has_corner ? c->corner.t_mm : 0;
 	g->p_end.x_mm = c->target.x_mm - fx_mul_q30(t, c->ux);
 	g->p_end.y_mm = c->target.y_mm - fx_mul_q30(t, c->uy);
@@ -622,6 +620,22 @@ static void cruise_line(motion_t *m, const motion_cmd_t *c)
 	q32_t len = fx_mul_q30(g->p_end.x_mm - r->x_mm, c->ux) +
 		    fx_mul_q30(g->p_end.y_mm - r->y_mm, c->uy);
 	g->len = len > 0 ? len : 0;
+}
+
+/* The corner of cruise command c, from the reference: the piece still holds
+ * c's line (cruise_line), so only the corner's own fields are set. */
+static void corner_piece(motion_t *m, const motion_cmd_t *c)
+{
+	seg_t *g = &m->seg;
+	g->kind = SEG_CORNER;
+	g->s = 0;
+	g->p0 = m->ref;
+	g->h = 0;
+	g->corner = c->corner;
+	g->len = 2 * c->corner.lh_mm;
+	g->p_end.x_mm = c->exit_x_mm;
+	g->p_end.y_mm = c->exit_y_mm;
+	g->p_end.th_deg = fx_wrap_deg(m->ref.th_deg + c->corner.phi_deg);
 }
 
 /* Sets up the next piece of the head command; false when it is finished. */
@@ -749,23 +763,9 @@ static bool next_piece(motion_t *m)
 					continue;
 				cruise_line(m, c);
 				return true;
-			case 2: {
-				if (!c->has_corner || c->corner.lh_mm == 0 || m->q_count < 2)
-					continue;
-				const motion_cmd_t *n = q_at(m, 1);
-				seg_t *g = seg_blended(m, SEG_CORNER, c->ux, c->uy);
-				g->corner = c->corner;
-				g->len = 2 * c->corner.lh_mm;
-				/* Exit: the waypoint plus the tangent length along the next
-				 * line. The integration arrives there within nanometres
-				 * (clothoid heading exact, midpoint steps); the piece ends
-				 * on it, so the next line is the one planned. */
-				g->p_end.x_mm = c->target.x_mm + fx_mul_q30(c->corner.t_mm, n->ux);
-				g->p_end.y_mm = c->target.y_mm + fx_mul_q30(c->corner.t_mm, n->uy);
-				g->p_end.th_deg = fx_wrap_deg(r->th_deg + c->corner.phi_deg);
-				return true;
-			}
 			default:
+				/* Its corner, if any, began as its line ended
+				 * (path_tick): nothing is left. */
 				return false;
 			}
 		default:
@@ -873,7 +873,10 @@ static void piece_advance(motion_t *m, q32_t s)
 		q32_t lh = g->corner.lh_mm;
 		q32_t h1 = traj_corner_heading(&g->corner, s);
 		q32_t hm;
-		if (s <= lh || s_old >= lh) {
+		if (s_old == 0 && s <= lh) {
+			/* The step in from the line: h(s / 2) = h1 / 4 exactly. */
+			hm = h1 / 4;
+		} else if (s <= lh || s_old >= lh) {
 			/* ds / Lh, Q30 (ds <= 2 Lh: the product fits) */
 			int64_t du = fx_mul_fit(ds, g->corner.inv_lh);
 			int32_t du2 = (int32_t)((du * du) >> 30);
@@ -1043,6 +1046,13 @@ static void path_tick(motion_t *m, fx_twist_t *out)
 			/* A stop: the last step covered the exact remainder (< a). */
 			m->v = 0;
 			break;
+		}
+		if (kind == SEG_LINE && q_at(m, 0)->corner.lh_mm != 0) {
+			/* Into the corner here, not through next_piece: this is
+			 * the dearest tick of a cruise (a collinear pass has no
+			 * corner piece). */
+			corner_piece(m, q_at(m, 0));
+			limits_changed(m);
 		}
 		if (budget == 0)
 			break;

@@ -75,6 +75,9 @@ typedef struct {
 	 * and the stopping distance counted beyond the end of the line and of
 	 * the corner (traj.h: a speed cap ahead is a virtual stop further on). */
 	q32_t corner_vrot_pt, corner_a_pt2, line_extra_mm, corner_extra_mm;
+	/* CRUISE with a corner: where it ends (the waypoint plus the tangent
+	 * length along the next line), fixed when it is planned. */
+	q32_t exit_x_mm, exit_y_mm;
 	traj_corner_t corner;
 } motion_cmd_t;
 

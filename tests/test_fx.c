@@ -212,6 +212,17 @@ static void test_angles(void **state)
 	assert_int_equal(fx_wrap_deg(fx_from_int(540)), -FX_DEG_180);
 	assert_int_equal(fx_wrap_deg(fx_from_int(-190)), fx_from_int(170));
 	assert_int_equal(fx_wrap_deg(fx_from_int(36000 + 45)), fx_from_int(45));
+	/* Each branch at its edges: in range, one turn out either way (no
+	 * division), further out, and the extremes of int64 (no overflow). */
+	assert_int_equal(fx_wrap_deg(FX_DEG_180 - 1), FX_DEG_180 - 1);
+	assert_int_equal(fx_wrap_deg(fx_from_int(540) - 1), FX_DEG_180 - 1);
+	assert_int_equal(fx_wrap_deg(-FX_DEG_180 - 1), FX_DEG_180 - 1);
+	assert_int_equal(fx_wrap_deg(fx_from_int(-540)), -FX_DEG_180);
+	assert_int_equal(fx_wrap_deg(fx_from_int(-540) - 1), FX_DEG_180 - 1);
+	assert_int_equal(fx_wrap_deg(fx_from_int(-36000 - 45)), -fx_from_int(45));
+	/* +-2^31 degrees is 5,965,232 turns and 128 degrees. */
+	assert_int_equal(fx_wrap_deg(INT64_MAX), fx_from_int(128) - 1);
+	assert_int_equal(fx_wrap_deg(INT64_MIN), -fx_from_int(128));
 	assert_int_equal(fx_deg_to_bam(fx_from_int(90)), 1u << 30);
 	assert_int_equal(fx_deg_to_bam(fx_from_int(-90)), 3u << 30);
 	/* atan2: the axes exactly, elsewhere within the last CORDIC step,

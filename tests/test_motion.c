@@ -397,6 +397,48 @@ static void test_set_pose_while_moving(void **state)
 	assert_true(fabs(d(r.m.ref.th_deg) - 90.0) < 1e-6);
 }
 
+/* setPosition on a cruise route's first line: the corners still ahead
+ * (their exits were planned in the old frame) follow the new frame, with no
+ * stop and no velocity step, and the route ends on its last waypoint mapped. */
+static void test_set_pose_during_cruise(void **state)
+{
+	(void)state;
+	rig_t r;
+	rig_init(&r, MOTION_KIN_DIFF);
+	double pts[4][2] = {{1000, 0}, {2000, 1000}, {3000, 1000}, {3000, 2000}};
+	for (int i = 0; i < 4; i++)
+		assert_true(motion_cruise_abs(&r.m, q(pts[i][0]), q(pts[i][1])));
+	for (int i = 0; i < 1000; i++)
+		rig_tick(&r);
+	double xb = d(r.m.ref.x_mm);
+	assert_int_equal(r.m.ref.y_mm, 0);
+	assert_int_equal(r.m.ref.th_deg, 0);
+	/* New frame: the unit is now at (100, 200) heading 90. */
+	fx_pose_t np = {q(100), q(200), q(90)};
+	motion_set_pose(&r.m, &np);
+	uint32_t stops = 0;
+	double step_max = 0;
+	while (motion_has_work(&r.m) && r.ticks < 60000) {
+		fx_pose_t before = r.m.ref;
+		rig_tick(&r);
+		if (motion_has_work(&r.m) && r.vx == 0 && r.w == 0)
+			stops++;
+		/* The reference moves continuously, at most the speed cap. */
+		step_max = fmax(step_max, hypot(d(r.m.ref.x_mm - before.x_mm),
+						d(r.m.ref.y_mm - before.y_mm)));
+	}
+	assert_false(motion_has_work(&r.m));
+	assert_int_equal(stops, 0);
+	assert_true(step_max <= 500.0 / HZ * 1.000001);
+	/* (3000, 2000) - (xb, 0) turned by 90 degrees, from (100, 200). */
+	assert_true(fabs(d(r.m.ref.x_mm) - (100.0 - 2000.0)) < 1e-6);
+	assert_true(fabs(d(r.m.ref.y_mm) - (200.0 + 3000.0 - xb)) < 1e-6);
+	assert_true(fabs(d(r.m.ref.th_deg) - 180.0) < 1e-6 ||
+		    fabs(d(r.m.ref.th_deg) + 180.0) < 1e-6);
+	assert_true(r.ax_max <= 500.0 * 1.01);
+	assert_true(r.aw_max <= 180.0 * 1.01);
+}
+
 /* Mecanum velocity modes: a diagonal jog accelerates as a vector within the
  * set acceleration; a continuous goal with y lands; a rotation-dominant
  * straight move turns first and lands exactly. */
@@ -468,6 +510,7 @@ int main(void)
 		cmocka_unit_test(test_turn_full_circle),
 		cmocka_unit_test(test_linear_abs_square),
 		cmocka_unit_test(test_cruise_keeps_moving),
+		cmocka_unit_test(test_set_pose_during_cruise),
 		cmocka_unit_test(test_jog_watchdog),
 		cmocka_unit_test(test_continuous_retarget),
 		cmocka_unit_test(test_pause_resume_stop),
