@@ -12,7 +12,7 @@
 #include <stdint.h>
 
 #define VS_ALARM_SOURCE_MAX 64
-#define VS_ALARM_LIST_MAX 16
+#define VS_ALARM_LIST_MAX   16
 
 typedef enum { VS_ALARM_UNKNOWN = 0, VS_ALARM_FAULT = 1, VS_ALARM_WARNING = 2 } vs_alarm_type_t;
 
@@ -24,38 +24,38 @@ typedef struct {
 
 /* Warning codes: why a command was refused, or a soft condition. */
 enum {
-	ALM_W_BAD_ARGUMENT = 110,   /* not finite, or out of range */
-	ALM_W_OVER_LIMIT = 111,     /* velocity/acceleration over the limit or <= 0 */
-	ALM_W_KINEMATICS = 112,     /* motion this base cannot make (y on differential) */
-	ALM_W_NOT_READY = 120,      /* Ready-only command while not idle with servo on */
-	ALM_W_SERVO_OFF = 121,      /* Servo-on command with servo off */
-	ALM_W_MOVING = 122,         /* refused while moving (setAcceleration, busy mode) */
-	ALM_W_FAULT_ACTIVE = 123,   /* motion refused: a fault is active */
-	ALM_W_LOCKED = 124,         /* motion refused: contact lock */
-	ALM_W_QUEUE_FULL = 125,     /* motion queue full */
-	ALM_W_BAD_IOID = 126,       /* unknown or reserved io id */
-	ALM_W_BAD_AXIS = 127,       /* unknown axis id */
-	ALM_W_POWER_OFF = 128,      /* setServo with main power off */
-	ALM_W_PAUSED = 129,         /* jog refused while paused */
-	ALM_W_STUCK = 130,          /* motion refused: obstacle present */
-	ALM_W_JOYSTICK = 131,       /* motion refused: joystick in use */
-	ALM_W_BATTERY_LOW = 140,    /* battery below the low threshold */
-	ALM_W_CONTACT = 150,        /* contact sensor tripped: unit Locked */
-	ALM_W_OBSTACLE = 151,       /* obstacle input tripped: unit Stuck */
-	ALM_W_JOYSTICK_LOST = 152,  /* joystick lost while in use: stopped */
+	ALM_W_BAD_ARGUMENT = 110,  /* not finite, or out of range */
+	ALM_W_OVER_LIMIT = 111,	   /* velocity/acceleration over the limit or <= 0 */
+	ALM_W_KINEMATICS = 112,	   /* motion this base cannot make (y on differential) */
+	ALM_W_NOT_READY = 120,	   /* Ready-only command while not idle with servo on */
+	ALM_W_SERVO_OFF = 121,	   /* Servo-on command with servo off */
+	ALM_W_MOVING = 122,	   /* refused while moving (setAcceleration, busy mode) */
+	ALM_W_FAULT_ACTIVE = 123,  /* motion refused: a fault is active */
+	ALM_W_LOCKED = 124,	   /* motion refused: contact lock */
+	ALM_W_QUEUE_FULL = 125,	   /* motion queue full */
+	ALM_W_BAD_IOID = 126,	   /* unknown or reserved io id */
+	ALM_W_BAD_AXIS = 127,	   /* unknown axis id */
+	ALM_W_POWER_OFF = 128,	   /* setServo with main power off */
+	ALM_W_PAUSED = 129,	   /* jog refused while paused */
+	ALM_W_STUCK = 130,	   /* motion refused: obstacle present */
+	ALM_W_JOYSTICK = 131,	   /* motion refused: joystick in use */
+	ALM_W_BATTERY_LOW = 140,   /* battery below the low threshold */
+	ALM_W_CONTACT = 150,	   /* contact sensor tripped: unit Locked */
+	ALM_W_OBSTACLE = 151,	   /* obstacle input tripped: unit Stuck */
+	ALM_W_JOYSTICK_LOST = 152, /* joystick lost while in use: stopped */
 };
 
 /* Fault codes. */
 enum {
-	ALM_F_DRIVE = 201,          /* a drive reported a fault */
-	ALM_F_DRIVE_TIMEOUT = 202,  /* a drive stopped answering */
-	ALM_F_ENCODER_STUCK = 203,  /* commanded motion, encoder does not move */
-	ALM_F_FOLLOWING = 204,      /* encoder runaway: measured departs from commanded */
-	ALM_F_POWER_ON = 205,       /* main relay did not close */
-	ALM_F_POWER_LOST = 206,     /* main power dropped while on */
+	ALM_F_DRIVE = 201,	   /* a drive reported a fault */
+	ALM_F_DRIVE_TIMEOUT = 202, /* a drive stopped answering */
+	ALM_F_ENCODER_STUCK = 203, /* commanded motion, encoder does not move */
+	ALM_F_FOLLOWING = 204,	   /* encoder runaway: measured departs from commanded */
+	ALM_F_POWER_ON = 205,	   /* main relay did not close */
+	ALM_F_POWER_LOST = 206,	   /* main power dropped while on */
 	ALM_F_BATTERY_CRITICAL = 207,
 	ALM_F_ESTOP = 208,
-	ALM_F_OVERRUN = 209,        /* control tick overran its period */
+	ALM_F_OVERRUN = 209, /* control tick overran its period */
 };
 
 typedef struct {

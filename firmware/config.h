@@ -10,8 +10,8 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#define VS_MAX_AXES 4
-#define VS_MAX_IO 32
+#define VS_MAX_AXES    4
+#define VS_MAX_IO      32
 #define VS_IO_NAME_MAX 24
 
 typedef enum {
@@ -25,9 +25,9 @@ typedef enum { VS_IO_IN = 0, VS_IO_OUT = 1 } vs_io_dir_t;
 /* One io.xml entry as the firmware sees it: the id and its shape. The line
  * mapping (chip, offsets, active-low) stays with the HAL backend. */
 typedef struct {
-	uint32_t id;    /* 1.. ; 0 is reserved for the unit itself */
-	uint8_t dir;    /* vs_io_dir_t */
-	uint8_t width;  /* value bits, 1..32 */
+	uint32_t id;   /* 1.. ; 0 is reserved for the unit itself */
+	uint8_t dir;   /* vs_io_dir_t */
+	uint8_t width; /* value bits, 1..32 */
 	char name[VS_IO_NAME_MAX];
 } vs_io_def_t;
 
@@ -37,8 +37,8 @@ typedef struct {
 
 	/* Geometry and sensing. */
 	double wheel_diameter_mm;
-	double track_width_mm;  /* differential: wheel to wheel; mecanum: left to right */
-	double wheel_base_mm;   /* mecanum: front to rear axle; unused on differential */
+	double track_width_mm;		 /* differential: wheel to wheel; mecanum: left to right */
+	double wheel_base_mm;		 /* mecanum: front to rear axle; unused on differential */
 	uint32_t encoder_counts_per_rev; /* per wheel revolution, after quadrature */
 
 	/* Limits (getVelocityLimit / getAccelerationLimit) and start-up values. */
@@ -49,10 +49,10 @@ typedef struct {
 	uint16_t jog_timeout_default_ms;
 
 	/* Wheel position loop and supervision. */
-	double wheel_kp_per_s;         /* position loop gain, 1/s */
-	double following_error_mm;     /* measured vs commanded wheel travel */
-	uint32_t encoder_stuck_ms;     /* commanded motion with no encoder change */
-	uint32_t drive_timeout_ms;     /* drive replies missing this long: fault */
+	double wheel_kp_per_s;	   /* position loop gain, 1/s */
+	double following_error_mm; /* measured vs commanded wheel travel */
+	uint32_t encoder_stuck_ms; /* commanded motion with no encoder change */
+	uint32_t drive_timeout_ms; /* drive replies missing this long: fault */
 
 	/* Cruise blending: how far the curve may start before a waypoint. */
 	double cruise_blend_mm;

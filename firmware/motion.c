@@ -350,10 +350,8 @@ static void backward_pass(motion_t *m)
 		}
 		c->corner_vrot_pt = corner_vrot(m, c);
 		/* A collinear pass (no corner piece) brakes at the line's rate. */
-		c->corner_a_pt2 = fx_max64(c->corner.lh_mm > 0
-					       ? fx_min64(m->a_t_pt2, c->corner.acc_pt2)
-					       : m->a_t_pt2,
-					   1);
+		c->corner_a_pt2 = fx_max64(
+		    c->corner.lh_mm > 0 ? fx_min64(m->a_t_pt2, c->corner.acc_pt2) : m->a_t_pt2, 1);
 		c->corner_extra_mm = 0;
 		q32_t v = fx_min64(vt_eff(m), c->corner_vrot_pt);
 		if ((uint8_t)(i + 1) < m->q_count) {
@@ -617,8 +615,8 @@ static void cruise_line(motion_t *m, const motion_cmd_t *c)
 	g->p_end.x_mm = c->target.x_mm - fx_mul_q30(t, c->ux);
 	g->p_end.y_mm = c->target.y_mm - fx_mul_q30(t, c->uy);
 	g->p_end.th_deg = r->th_deg;
-	q32_t len = fx_mul_q30(g->p_end.x_mm - r->x_mm, c->ux) +
-		    fx_mul_q30(g->p_end.y_mm - r->y_mm, c->uy);
+	q32_t len =
+	    fx_mul_q30(g->p_end.x_mm - r->x_mm, c->ux) + fx_mul_q30(g->p_end.y_mm - r->y_mm, c->uy);
 	g->len = len > 0 ? len : 0;
 }
 
@@ -982,9 +980,9 @@ static void path_tick(motion_t *m, fx_twist_t *out)
 				if (m->lim_cruise < 0)
 					m->lim_cruise =
 					    m->lim_vmax + traj_brake_dist(m->lim_vmax, m->lim_a);
-				u = d >= m->lim_cruise ? m->v
-						       : traj_step_near(m->v, d, m->lim_vmax,
-									m->lim_a, &m->lim_n);
+				u = d >= m->lim_cruise
+					? m->v
+					: traj_step_near(m->v, d, m->lim_vmax, m->lim_a, &m->lim_n);
 			} else {
 				u = traj_step_near(m->v, d, m->lim_vmax, m->lim_a, &m->lim_n);
 			}
@@ -1013,8 +1011,8 @@ static void path_tick(motion_t *m, fx_twist_t *out)
 			m->v = u;
 		}
 		q32_t rem = m->seg.len - m->seg.s;
-		along = along && (m->seg.kind == SEG_CORNER ||
-				  (m->seg.kind == SEG_LINE && m->seg.dth == 0));
+		along = along &&
+			(m->seg.kind == SEG_CORNER || (m->seg.kind == SEG_LINE && m->seg.dth == 0));
 		if (dir == 0)
 			dir = m->seg.dir;
 		if (budget < rem) {

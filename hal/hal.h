@@ -18,14 +18,14 @@
 
 typedef struct {
 	int32_t position_counts; /* free-running, wraps; compare by difference */
-	uint16_t fault_code;     /* 0: no fault; otherwise the drive's own code */
-	bool enabled;            /* power stage actually on (servo on) */
-	bool fresh;              /* a reply arrived since the previous read */
+	uint16_t fault_code;	 /* 0: no fault; otherwise the drive's own code */
+	bool enabled;		 /* power stage actually on (servo on) */
+	bool fresh;		 /* a reply arrived since the previous read */
 } hal_drive_state_t;
 
 typedef struct {
 	int16_t axis[3]; /* x (forward), y (left), rotation (CCW); +-32767 full scale */
-	bool present;    /* false: no device, or the device was lost */
+	bool present;	 /* false: no device, or the device was lost */
 } hal_joystick_t;
 
 typedef struct vs_hal_ops {

@@ -240,9 +240,10 @@ static void usage(FILE *f)
 	      "                  implies --realtime, keeps running after stdin ends\n"
 	      "  --node N        CAN node id, 1..127 (default 1)\n"
 	      "  --status-hz N   CAN status frame rate, 0 (off)..1000 (default 10)\n"
-	      "  --pty           serve the serial link (console and binary frames, docs/protocol.md)\n"
-	      "                  on a new pseudo-terminal instead of stdin/stdout; prints its path\n"
-	      "                  as the first line on stdout; implies --realtime, runs until a signal\n"
+	      "  --pty           serve the serial link (console and frames, docs/protocol.md) on\n"
+	      "                  a new pseudo-terminal instead of stdin/stdout; prints its path\n"
+	      "                  as the first line on stdout; implies --realtime; runs until a\n"
+	      "                  signal\n"
 	      "  --baud N        line speed set on the pty (default 115200; nominal on a pty)\n"
 	      "  --help          this text\n"
 	      "Console on stdin/stdout (spec section 7); simulator extras: $wait MS, $sim ...\n"
@@ -263,8 +264,21 @@ int main(int argc, char **argv)
 	bool pty = false;
 	unsigned long baud = VC_DEFAULT_BAUD;
 
-	enum { O_CONFIG = 1, O_IO, O_RT, O_FAST, O_TRACE, O_EVERY, O_IDEAL, O_HELP, O_CAN, O_NODE, O_HZ,
-	       O_PTY, O_BAUD };
+	enum {
+		O_CONFIG = 1,
+		O_IO,
+		O_RT,
+		O_FAST,
+		O_TRACE,
+		O_EVERY,
+		O_IDEAL,
+		O_HELP,
+		O_CAN,
+		O_NODE,
+		O_HZ,
+		O_PTY,
+		O_BAUD
+	};
 	static const struct option opts[] = {
 	    {"config", required_argument, NULL, O_CONFIG},
 	    {"io", required_argument, NULL, O_IO},
@@ -325,7 +339,8 @@ int main(int argc, char **argv)
 			char *end;
 			baud = strtoul(optarg, &end, 10);
 			if (*optarg == '\0' || *end != '\0' || baud == 0 || baud > 4000000) {
-				fprintf(stderr, "vehicle-sim: --baud: a line speed such as 115200\n");
+				fprintf(stderr,
+					"vehicle-sim: --baud: a line speed such as 115200\n");
 				return 2;
 			}
 			break;

@@ -6,16 +6,22 @@
 #   clang-tidy  the checks of .clang-tidy (reasons there), warnings as errors
 #   clang       -Wconversion -Wshadow -Wsign-conversion -Werror on firmware/ and
 #               proto/ (the gcc build enforces the same; clang sees more)
-# tests/ are excluded (cmocka macros); they build with -Wall -Wextra -Werror.
+#   clang-format every tracked C file follows .clang-format (`make format` fixes)
+# tests/ are excluded from the analysers (cmocka macros); they build with
+# -Wall -Wextra -Werror.
 # hal/linux/ (the vehicle-fw backends, mk/linux.mk) is not in the set yet.
 
 LINT_SRC := $(FW_SRC) $(PROTO_SRC) $(HOST_SRC) $(SIM_SRC) $(wildcard host_sim/*_main.c)
 LINT_DEFS := -std=c11 -I. -D_GNU_SOURCE
 CLANG ?= clang
 
-.PHONY: lint lint-cppcheck lint-tidy lint-warnings
+.PHONY: lint lint-cppcheck lint-tidy lint-warnings lint-format
 
-lint: lint-cppcheck lint-warnings lint-tidy
+lint: lint-format lint-cppcheck lint-warnings lint-tidy
+
+lint-format:
+	@echo "  FORMAT  .clang-format"
+	$(Q)git ls-files '*.c' '*.h' | xargs clang-format --dry-run -Werror
 
 lint-cppcheck:
 	@echo "  CPPCHECK firmware proto hal host_sim"

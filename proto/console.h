@@ -16,19 +16,19 @@
 
 #include "../firmware/vehicle.h"
 
-#define CONSOLE_LINE_MAX 255
+#define CONSOLE_LINE_MAX  255
 #define CONSOLE_REPLY_MAX 1024
 
 /* Console error codes ("error <code> <message>"). */
 enum {
-	CONSOLE_E_UNKNOWN_OP = 1,   /* no such operation */
-	CONSOLE_E_ARITY = 2,        /* wrong number of arguments */
-	CONSOLE_E_NUMBER = 3,       /* not a number, or not finite */
-	CONSOLE_E_RANGE = 4,        /* integer out of its IDL type's range */
-	CONSOLE_E_BOOL = 5,         /* not a boolean */
-	CONSOLE_E_TOO_LONG = 6,     /* line over CONSOLE_LINE_MAX bytes */
-	CONSOLE_E_BINARY = 7,       /* control or non-ASCII bytes in the line */
-	CONSOLE_E_EXTRA = 8,        /* a '$' bring-up command failed */
+	CONSOLE_E_UNKNOWN_OP = 1, /* no such operation */
+	CONSOLE_E_ARITY = 2,	  /* wrong number of arguments */
+	CONSOLE_E_NUMBER = 3,	  /* not a number, or not finite */
+	CONSOLE_E_RANGE = 4,	  /* integer out of its IDL type's range */
+	CONSOLE_E_BOOL = 5,	  /* not a boolean */
+	CONSOLE_E_TOO_LONG = 6,	  /* line over CONSOLE_LINE_MAX bytes */
+	CONSOLE_E_BINARY = 7,	  /* control or non-ASCII bytes in the line */
+	CONSOLE_E_EXTRA = 8,	  /* a '$' bring-up command failed */
 };
 
 typedef void (*console_write_fn)(void *ctx, const char *s, size_t n);
@@ -44,8 +44,8 @@ typedef struct {
 	void *xctx;
 	char line[CONSOLE_LINE_MAX + 1];
 	size_t len;
-	bool overflow;    /* discarding the rest of an over-long line */
-	bool last_cr;     /* swallow the LF of a CRLF */
+	bool overflow; /* discarding the rest of an over-long line */
+	bool last_cr;  /* swallow the LF of a CRLF */
 	uint32_t lines, errors;
 } console_t;
 

@@ -27,10 +27,10 @@ static char rep[CONSOLE_REPLY_MAX];
 
 /* Reference base: 1 kHz tick, set velocity 500 mm/s, set acceleration
  * 500 mm/s^2, limits 1000 mm/s and 1000 mm/s^2, jog timeout 500 ms. */
-#define TICK_HZ	     1000.0
-#define ACC_SET	     500.0
-#define ACC_LIMIT    1000.0
-#define CRUISE_MM_S  500.0
+#define TICK_HZ	    1000.0
+#define ACC_SET	    500.0
+#define ACC_LIMIT   1000.0
+#define CRUISE_MM_S 500.0
 
 static int setup(void **state)
 {

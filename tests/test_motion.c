@@ -15,8 +15,14 @@
 #define HZ 1000
 static const double Q = 4294967296.0;
 
-static q32_t q(double v) { return (q32_t)llround(v * Q); }
-static double d(q32_t v) { return (double)v / Q; }
+static q32_t q(double v)
+{
+	return (q32_t)llround(v * Q);
+}
+static double d(q32_t v)
+{
+	return (double)v / Q;
+}
 
 typedef struct {
 	motion_t m;
@@ -28,13 +34,13 @@ typedef struct {
 static void rig_init(rig_t *r, motion_kin_t kin)
 {
 	motion_params_t p = {
-		.tick_hz = HZ,
-		.kin = kin,
-		.vel_limit_t = q(1000),
-		.vel_limit_r = q(180),
-		.acc_limit_t = q(1000),
-		.acc_limit_r = q(360),
-		.cruise_blend_mm = q(200),
+	    .tick_hz = HZ,
+	    .kin = kin,
+	    .vel_limit_t = q(1000),
+	    .vel_limit_r = q(180),
+	    .acc_limit_t = q(1000),
+	    .acc_limit_r = q(360),
+	    .cruise_blend_mm = q(200),
 	};
 	*r = (rig_t){0};
 	motion_init(&r->m, &p);
@@ -255,7 +261,6 @@ static void test_arc_quarter(void **state)
 	assert_false(motion_circular_rel(&r.m, q(10), q(1000), q(90)));
 }
 
-
 /* The active piece's limits follow every change made while it runs: a lower
  * speed, a caution cap inside a corner, a waypoint queued behind the line. */
 static void test_limits_change_mid_piece(void **state)
@@ -348,7 +353,6 @@ static void test_limits_change_mid_piece(void **state)
 	assert_true(r.ax_max <= 500.0 * 1.00001);
 }
 
-
 /* A lower acceleration set while paused, before queued cruise waypoints
  * start, re-plans their corner speeds: the unit still brakes at the new
  * rate into a short last leg. */
@@ -372,7 +376,6 @@ static void test_accel_lowered_while_paused(void **state)
 	assert_int_equal(r.m.ref.y_mm, q(103));
 	assert_true(r.ax_max <= 100.0 * 1.00001);
 }
-
 
 /* Redefining the pose mid-move keeps the motion's physical course: no
  * velocity step, and the end lands where it would have, in the new frame. */
@@ -424,8 +427,8 @@ static void test_set_pose_during_cruise(void **state)
 		if (motion_has_work(&r.m) && r.vx == 0 && r.w == 0)
 			stops++;
 		/* The reference moves continuously, at most the speed cap. */
-		step_max = fmax(step_max, hypot(d(r.m.ref.x_mm - before.x_mm),
-						d(r.m.ref.y_mm - before.y_mm)));
+		step_max = fmax(
+		    step_max, hypot(d(r.m.ref.x_mm - before.x_mm), d(r.m.ref.y_mm - before.y_mm)));
 	}
 	assert_false(motion_has_work(&r.m));
 	assert_int_equal(stops, 0);
@@ -506,21 +509,21 @@ static void test_set_pose_during_arc(void **state)
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
-		cmocka_unit_test(test_forward_lands_exactly),
-		cmocka_unit_test(test_turn_full_circle),
-		cmocka_unit_test(test_linear_abs_square),
-		cmocka_unit_test(test_cruise_keeps_moving),
-		cmocka_unit_test(test_set_pose_during_cruise),
-		cmocka_unit_test(test_jog_watchdog),
-		cmocka_unit_test(test_continuous_retarget),
-		cmocka_unit_test(test_pause_resume_stop),
-		cmocka_unit_test(test_omni_linear),
-		cmocka_unit_test(test_arc_quarter),
-		cmocka_unit_test(test_set_pose_while_moving),
-		cmocka_unit_test(test_omni_modes),
-		cmocka_unit_test(test_set_pose_during_arc),
-		cmocka_unit_test(test_limits_change_mid_piece),
-		cmocka_unit_test(test_accel_lowered_while_paused),
+	    cmocka_unit_test(test_forward_lands_exactly),
+	    cmocka_unit_test(test_turn_full_circle),
+	    cmocka_unit_test(test_linear_abs_square),
+	    cmocka_unit_test(test_cruise_keeps_moving),
+	    cmocka_unit_test(test_set_pose_during_cruise),
+	    cmocka_unit_test(test_jog_watchdog),
+	    cmocka_unit_test(test_continuous_retarget),
+	    cmocka_unit_test(test_pause_resume_stop),
+	    cmocka_unit_test(test_omni_linear),
+	    cmocka_unit_test(test_arc_quarter),
+	    cmocka_unit_test(test_set_pose_while_moving),
+	    cmocka_unit_test(test_omni_modes),
+	    cmocka_unit_test(test_set_pose_during_arc),
+	    cmocka_unit_test(test_limits_change_mid_piece),
+	    cmocka_unit_test(test_accel_lowered_while_paused),
 	};
 	return cmocka_run_group_tests_name("motion", tests, NULL, NULL);
 }

@@ -24,7 +24,7 @@ static const double Q = 4294967296.0;
 #define AR 120.0
 
 typedef struct {
-	double v, w;        /* commanded, per second */
+	double v, w;	    /* commanded, per second */
 	double x, y, th;    /* odometry */
 	double tx, ty, tth; /* true plant pose */
 	int16_t state;
@@ -122,7 +122,8 @@ static void assert_acc_within_1pct(const rig_t *r)
 	double at, ar;
 	max_acc(r, &at, &ar);
 	if (at > AT * 1.01 || ar > AR * 1.01)
-		fail_msg("acceleration %.3f mm/s^2, %.3f deg/s^2 over the set %.0f, %.0f", at, ar, AT, AR);
+		fail_msg("acceleration %.3f mm/s^2, %.3f deg/s^2 over the set %.0f, %.0f", at, ar,
+			 AT, AR);
 }
 
 /* Runs until the unit is Ready again (or the limit). */
@@ -186,7 +187,8 @@ static void test_linear_abs_square(void **state)
 	run_until_ready(r, 120000);
 	sim_run_ms(&r->sim, 200);
 	sample_t *e = &r->s[r->n - 1];
-	printf("square: back at %.4f %.4f %.4f (true %.4f %.4f)\n", e->x, e->y, e->th, e->tx, e->ty);
+	printf("square: back at %.4f %.4f %.4f (true %.4f %.4f)\n", e->x, e->y, e->th, e->tx,
+	       e->ty);
 	assert_true(hypot(e->x, e->y) <= 0.1);
 	assert_true(hypot(e->tx, e->ty) <= 0.1);
 	assert_true(angle_err(e->th, 0) <= 0.01);
@@ -257,8 +259,8 @@ static void test_continuous_retarget_is_smooth(void **state)
 	for (size_t i = 1; i < r->n; i++) {
 		double dv = fabs(r->s[i].v - r->s[i - 1].v), dw = fabs(r->s[i].w - r->s[i - 1].w);
 		if (dv > AT / HZ * 1.0000001 || dw > AR / HZ * 1.0000001)
-			fail_msg("step %.6f mm/s, %.6f deg/s at tick %zu (retarget at %zu)", dv, dw, i,
-				 at_retarget);
+			fail_msg("step %.6f mm/s, %.6f deg/s at tick %zu (retarget at %zu)", dv, dw,
+				 i, at_retarget);
 	}
 }
 
@@ -286,7 +288,6 @@ static void test_jog_watchdog(void **state)
 	assert_true(elapsed_ms >= 300);
 	assert_int_equal(r->s[r->n - 1].state, VS_STATE_READY);
 }
-
 
 static void test_set_velocity_while_moving(void **state)
 {
@@ -352,14 +353,14 @@ static void test_omni_base(void **state)
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
-		cmocka_unit_test_setup_teardown(test_forward_10m, setup, teardown),
-		cmocka_unit_test_setup_teardown(test_turn_360, setup, teardown),
-		cmocka_unit_test_setup_teardown(test_linear_abs_square, setup, teardown),
-		cmocka_unit_test_setup_teardown(test_cruise_does_not_stop, setup, teardown),
-		cmocka_unit_test_setup_teardown(test_continuous_retarget_is_smooth, setup, teardown),
-		cmocka_unit_test_setup_teardown(test_jog_watchdog, setup, teardown),
-		cmocka_unit_test_setup_teardown(test_set_velocity_while_moving, setup, teardown),
-		cmocka_unit_test_setup_teardown(test_omni_base, setup, teardown),
+	    cmocka_unit_test_setup_teardown(test_forward_10m, setup, teardown),
+	    cmocka_unit_test_setup_teardown(test_turn_360, setup, teardown),
+	    cmocka_unit_test_setup_teardown(test_linear_abs_square, setup, teardown),
+	    cmocka_unit_test_setup_teardown(test_cruise_does_not_stop, setup, teardown),
+	    cmocka_unit_test_setup_teardown(test_continuous_retarget_is_smooth, setup, teardown),
+	    cmocka_unit_test_setup_teardown(test_jog_watchdog, setup, teardown),
+	    cmocka_unit_test_setup_teardown(test_set_velocity_while_moving, setup, teardown),
+	    cmocka_unit_test_setup_teardown(test_omni_base, setup, teardown),
 	};
 	return cmocka_run_group_tests_name("motion on the ideal plant", tests, NULL, NULL);
 }

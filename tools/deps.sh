@@ -3,7 +3,7 @@
 # Idempotent: installs only what is missing. Run as root (or with sudo).
 set -e
 PKGS="build-essential make pkg-config libcmocka-dev libexpat1-dev valgrind clang \
-clang-tidy cppcheck gcc-arm-none-eabi libnewlib-arm-none-eabi socat \
+clang-format clang-tidy cppcheck gcc-arm-none-eabi libnewlib-arm-none-eabi socat \
 libgpiod-dev gpiod libmodbus-dev libevdev-dev python3-pymodbus python3-serial-asyncio \
 libclang-rt-14-dev gcovr"
 missing=""

@@ -27,7 +27,7 @@
 #include "../proto/link.h"
 #include "../proto/numparse.h"
 
-#define DEFAULT_CONFIG "/etc/vehicle/vehicle.xml"
+#define DEFAULT_CONFIG	"/etc/vehicle/vehicle.xml"
 #define DEFAULT_RT_PRIO 80
 /* Longest deceleration the shutdown waits for before cutting power. */
 #define SHUTDOWN_BOUND_MS 10000u
@@ -94,9 +94,12 @@ static bool rt_extra(void *ctx, int argc, char **argv, char *reply, size_t cap)
 		 "ok period_us %u ticks %llu overruns %llu max_late_us %u skipped %llu sched %s "
 		 "prio %d mlock %s gpio_errors %u joystick %s battery_errors %u",
 		 a->period_us, (unsigned long long)a->st.ticks, (unsigned long long)a->st.overruns,
-		 a->st.max_late_us, (unsigned long long)a->st.skipped, a->rt.fifo ? "fifo" : "other",
-		 a->rt.priority, a->rt.locked ? "yes" : "no", a->hal.gpio.errors,
-		 !a->hal.bk.joystick.used ? "none" : a->hal.joy.present ? "present" : "absent",
+		 a->st.max_late_us, (unsigned long long)a->st.skipped,
+		 a->rt.fifo ? "fifo" : "other", a->rt.priority, a->rt.locked ? "yes" : "no",
+		 a->hal.gpio.errors,
+		 !a->hal.bk.joystick.used ? "none"
+		 : a->hal.joy.present	  ? "present"
+					  : "absent",
 		 a->hal.battery_errors);
 	/* then one group of counters per CANopen bus */
 	for (unsigned b = 0; b < BK_CANOPEN_BUSES; b++) {
@@ -140,7 +143,8 @@ static void wait_next(app_t *a, struct timespec *next)
 	if (late > 0 && (unsigned long long)late / 1000ull > a->st.max_late_us)
 		a->st.max_late_us = (uint32_t)((unsigned long long)late / 1000ull);
 	if (late > SKIP_AFTER_NS) {
-		a->st.skipped += (unsigned long long)late / ((unsigned long long)a->period_us * 1000ull);
+		a->st.skipped +=
+		    (unsigned long long)late / ((unsigned long long)a->period_us * 1000ull);
 		*next = now;
 	}
 }
@@ -235,7 +239,8 @@ int main(int argc, char **argv)
 			break;
 		case O_BAUD:
 			if (parse_ulong(optarg, 4000000, &baud) < 0 || baud == 0) {
-				fprintf(stderr, "vehicle-fw: --baud: a line speed such as 115200\n");
+				fprintf(stderr,
+					"vehicle-fw: --baud: a line speed such as 115200\n");
 				return 2;
 			}
 			break;
@@ -298,20 +303,24 @@ int main(int argc, char **argv)
 	for (size_t i = 0; i < sizeof(needs) / sizeof(needs[0]); i++)
 		if (*(const bool *)((const char *)&cfg + needs[i].off) &&
 		    !lgpio_has_fn(&a->hal.gpio, needs[i].fn))
-			rt_log(LOG_WARNING, "%s is configured in <devices> but has no <line>: reads "
-					    "inactive", backend_line_name(needs[i].fn));
+			rt_log(LOG_WARNING,
+			       "%s is configured in <devices> but has no <line>: reads "
+			       "inactive",
+			       backend_line_name(needs[i].fn));
 
 	if (bk.joystick.used)
-		rt_log(a->hal.joy.present ? LOG_INFO : LOG_WARNING, "joystick %s: %s", bk.joystick.device,
+		rt_log(a->hal.joy.present ? LOG_INFO : LOG_WARNING, "joystick %s: %s",
+		       bk.joystick.device,
 		       a->hal.joy.present ? "open" : "not present (looked for once a second)");
 	for (unsigned n = 0; n < BK_MODBUS_BUSES; n++)
 		if (bk.bus[n].used &&
 		    bk.bus[n].timeout_ms * (bk.bus[n].retries + 1) >= cfg.drive_timeout_ms)
-			rt_log(LOG_WARNING,
-			       "modbus bus %u: timeout_ms x (retries + 1) = %u ms reaches the drive "
-			       "timeout (%u ms): one lost reply can trip it",
-			       n, bk.bus[n].timeout_ms * (bk.bus[n].retries + 1),
-			       (unsigned)cfg.drive_timeout_ms);
+			rt_log(
+			    LOG_WARNING,
+			    "modbus bus %u: timeout_ms x (retries + 1) = %u ms reaches the drive "
+			    "timeout (%u ms): one lost reply can trip it",
+			    n, bk.bus[n].timeout_ms * (bk.bus[n].retries + 1),
+			    (unsigned)cfg.drive_timeout_ms);
 
 	a->vh.ops = &lhal_ops;
 	a->vh.ctx = &a->hal;

@@ -18,7 +18,7 @@
 typedef struct {
 	uint32_t tick_hz;
 	int32_t counts[LOOP_HAL_AXES];
-	int64_t rem[LOOP_HAL_AXES]; /* sub-count remainder, 1/(256 tick_hz) counts */
+	int64_t rem[LOOP_HAL_AXES];    /* sub-count remainder, 1/(256 tick_hz) counts */
 	int32_t cps_q8[LOOP_HAL_AXES]; /* last setpoint, counts/s Q8 */
 	bool enabled[LOOP_HAL_AXES];
 	bool relay;

@@ -77,11 +77,11 @@ enum { BK_DRIVE_LOOPBACK = 0, BK_DRIVE_MODBUS = 1, BK_DRIVE_CIA402 = 2 };
 
 enum {
 	BK_REG_TARGET_SPEED = 0, /* int32, 2 registers, high word first: counts/s */
-	BK_REG_POSITION,         /* int32, 2 registers: counts */
-	BK_REG_STATUS,           /* bit 0: power stage enabled */
-	BK_REG_ALARM,            /* the drive's alarm code, 0: none */
-	BK_REG_SERVO_ON,         /* written 1/0 */
-	BK_REG_FAULT_RESET,      /* written 1 to reset a fault */
+	BK_REG_POSITION,	 /* int32, 2 registers: counts */
+	BK_REG_STATUS,		 /* bit 0: power stage enabled */
+	BK_REG_ALARM,		 /* the drive's alarm code, 0: none */
+	BK_REG_SERVO_ON,	 /* written 1/0 */
+	BK_REG_FAULT_RESET,	 /* written 1 to reset a fault */
 	BK_REG_COUNT,
 };
 
@@ -155,9 +155,9 @@ typedef struct {
 	bk_canopen_bus_t canopen[BK_CANOPEN_BUSES];
 	uint32_t settle_ms;
 	uint8_t battery_source;
-	uint32_t battery_mv;        /* fixed */
-	char battery_path[256];     /* iio: a sysfs *_raw file */
-	double battery_scale;       /* iio, modbus: mV per raw count */
+	uint32_t battery_mv;	/* fixed */
+	char battery_path[256]; /* iio: a sysfs *_raw file */
+	double battery_scale;	/* iio, modbus: mV per raw count */
 	bk_battery_modbus_t battery_mb;
 	bk_line_t lines[BK_LINE_COUNT];
 	bk_joystick_t joystick;

@@ -36,7 +36,8 @@ static struct gpiod_line *line_get(lgpio_t *g, const char *chip, uint32_t off, b
 		return NULL;
 	struct gpiod_line *l = gpiod_chip_get_line(c, off);
 	if (!l) {
-		snprintf(err, errlen, "gpio: %s line %u (%s): %s", chip, off, what, strerror(errno));
+		snprintf(err, errlen, "gpio: %s line %u (%s): %s", chip, off, what,
+			 strerror(errno));
 		return NULL;
 	}
 	int flags = active_low ? GPIOD_LINE_REQUEST_FLAG_ACTIVE_LOW : 0;

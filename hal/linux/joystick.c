@@ -58,7 +58,8 @@ static void try_open(ljoy_t *j)
 	for (int i = 0; i < 3; i++) {
 		if (j->cfg.code[i] < 0)
 			continue;
-		const struct input_absinfo *ai = libevdev_get_abs_info(dev, (unsigned)j->cfg.code[i]);
+		const struct input_absinfo *ai =
+		    libevdev_get_abs_info(dev, (unsigned)j->cfg.code[i]);
 		if (!ai || ai->maximum <= ai->minimum) {
 			libevdev_free(dev);
 			close_later(j, fd);

@@ -10,7 +10,7 @@
 #include <unistd.h>
 
 #define BATTERY_PERIOD_US 200000u
-#define Q8_US 256000000LL /* counts x256 x1e6: one count in rem units */
+#define Q8_US		  256000000LL /* counts x256 x1e6: one count in rem units */
 
 /* One sysfs read of an IIO *_raw attribute; false on any failure. */
 static bool read_iio(const char *path, double scale, uint32_t *mv)
@@ -48,7 +48,8 @@ int lhal_open(lhal_t *h, const backend_cfg_t *bk, const hal_io_map_t *io, uint8_
 		bool battery = bk->battery_source == BK_BATTERY_MODBUS && bk->battery_mb.bus == n;
 		bool needed = battery;
 		for (uint8_t i = 0; i < naxes; i++)
-			needed = needed || (bk->drive_type[i] == BK_DRIVE_MODBUS && bk->drive_bus[i] == n);
+			needed = needed ||
+				 (bk->drive_type[i] == BK_DRIVE_MODBUS && bk->drive_bus[i] == n);
 		if (!needed)
 			continue;
 		if (mb_bus_open(&h->bus[n], &bk->bus[n], err, errlen) < 0)

@@ -22,9 +22,9 @@
 
 typedef struct {
 	bool enabled;
-	int32_t vel_q8;   /* counts/s x256 */
-	int32_t pos;      /* counts, wraps */
-	int64_t rem;      /* position remainder, counts x256 x1e6 */
+	int32_t vel_q8; /* counts/s x256 */
+	int32_t pos;	/* counts, wraps */
+	int64_t rem;	/* position remainder, counts x256 x1e6 */
 } lhal_loop_drive_t;
 
 typedef struct {

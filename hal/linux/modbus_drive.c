@@ -10,8 +10,8 @@
 #include "rt.h"
 
 #define CYCLE_PAUSE_NS 1000000L /* between cycles: leaves the line idle briefly */
-#define BLOCK_MAX 8
-#define PROBE_US 200000u
+#define BLOCK_MAX      8
+#define PROBE_US       200000u
 
 static uint64_t mono_us(void)
 {
@@ -24,8 +24,8 @@ int mb_bus_open(mb_bus_t *b, const bk_modbus_bus_t *cfg, char *err, size_t errle
 {
 	memset(b, 0, sizeof(*b));
 	b->cfg = *cfg;
-	modbus_t *m = modbus_new_rtu(cfg->device, (int)cfg->baud, cfg->parity, 8,
-				     (int)cfg->stop_bits);
+	modbus_t *m =
+	    modbus_new_rtu(cfg->device, (int)cfg->baud, cfg->parity, 8, (int)cfg->stop_bits);
 	if (!m) {
 		snprintf(err, errlen, "modbus: %s: %s", cfg->device, modbus_strerror(errno));
 		return -1;

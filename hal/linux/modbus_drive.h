@@ -48,7 +48,7 @@ typedef struct {
 	bool fresh;
 	uint32_t failures; /* cycles whose reads failed */
 	/* bus thread only */
-	bool silent;             /* last cycle failed: probe only */
+	bool silent; /* last cycle failed: probe only */
 	uint64_t next_probe_us;
 	bool enable_sent_ok;
 	bool enable_sent;
@@ -81,7 +81,7 @@ typedef struct {
 	unsigned nd;
 	mb_battery_t bat;
 	uint32_t requests, retries, errors; /* under mu */
-	uint32_t cur_retries;               /* bus thread: retries of this drive */
+	uint32_t cur_retries;		    /* bus thread: retries of this drive */
 } mb_bus_t;
 
 /* Opens the port (8 data bits). -1 with a message. */

@@ -13,8 +13,8 @@ void rt_log_open(bool use_syslog);
 void rt_log(int prio, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 
 typedef struct {
-	bool locked;   /* mlockall succeeded */
-	bool fifo;     /* SCHED_FIFO granted */
+	bool locked; /* mlockall succeeded */
+	bool fifo;   /* SCHED_FIFO granted */
 	int priority;
 } rt_status_t;
 
@@ -27,7 +27,7 @@ typedef struct {
 	uint64_t ticks;
 	uint64_t overruns;
 	uint32_t max_late_us;
-	uint64_t skipped;   /* periods dropped after falling far behind */
+	uint64_t skipped; /* periods dropped after falling far behind */
 } rt_stats_t;
 
 void ts_add_ns(struct timespec *t, long long ns);

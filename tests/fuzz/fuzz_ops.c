@@ -25,7 +25,7 @@
 #include "../../host_sim/sim.h"
 
 #define MAX_ACTIONS 96
-#define MAX_TICKS 20000 /* per input: 20 s at 1 kHz */
+#define MAX_TICKS   20000 /* per input: 20 s at 1 kHz */
 
 typedef struct {
 	const uint8_t *p;
@@ -49,11 +49,11 @@ static uint32_t u32(rd_t *r)
 static double dbl(rd_t *r)
 {
 	static const double tab[] = {
-	    0.0,     -0.0,   1.0,      -1.0,    0.5,     10.0,     -10.0,  45.0,     90.0,
-	    -90.0,   100.0,  -100.0,   179.9,   180.0,   180.001,  -180.0, 200.0,    360.0,
-	    -360.0,  499.9,  500.0,    999.999, 1000.0,  1000.001, -1000.0, 1e-9,    5e-324,
-	    36000.0, 36000.1, 1e6,     -1e6,    1e6 + 1, 1e300,    -1e300, NAN,      INFINITY,
-	    -INFINITY, 3.0,  2000.0,   -2000.0, 0.001,   250.0,    720.0,  100000.0, 100001.0,
+	    0.0,       -0.0,	1.0,	-1.0,	 0.5,	  10.0,	    -10.0,   45.0,     90.0,
+	    -90.0,     100.0,	-100.0, 179.9,	 180.0,	  180.001,  -180.0,  200.0,    360.0,
+	    -360.0,    499.9,	500.0,	999.999, 1000.0,  1000.001, -1000.0, 1e-9,     5e-324,
+	    36000.0,   36000.1, 1e6,	-1e6,	 1e6 + 1, 1e300,    -1e300,  NAN,      INFINITY,
+	    -INFINITY, 3.0,	2000.0, -2000.0, 0.001,	  250.0,    720.0,   100000.0, 100001.0,
 	};
 	uint8_t k = u8(r);
 	if (k < sizeof tab / sizeof tab[0])
@@ -67,7 +67,7 @@ static double dbl(rd_t *r)
 }
 
 static sim_t S;
-static bool armed;          /* a command may be moving the unit */
+static bool armed; /* a command may be moving the unit */
 static double rest_x, rest_y, rest_th;
 static bool have_rest;
 static fx_twist_t prev_cmd;
@@ -98,20 +98,37 @@ static void check_state(void)
 	if ((st == VS_STATE_ALARM) != (f != NULL))
 		abort();
 	switch (st) {
-	case VS_STATE_READY: snprintf(want, sizeof want, "Ready"); break;
-	case VS_STATE_BUSY: snprintf(want, sizeof want, "Busy"); break;
+	case VS_STATE_READY:
+		snprintf(want, sizeof want, "Ready");
+		break;
+	case VS_STATE_BUSY:
+		snprintf(want, sizeof want, "Busy");
+		break;
 	case VS_STATE_WARNING:
 		if (!w)
 			abort();
 		snprintf(want, sizeof want, "Warning-%03u", (unsigned)w->code);
 		break;
-	case VS_STATE_ALARM: snprintf(want, sizeof want, "Alarm-%03u", (unsigned)f->code); break;
-	case VS_STATE_STUCK: snprintf(want, sizeof want, "Stuck"); break;
-	case VS_STATE_PAUSED: snprintf(want, sizeof want, "Paused"); break;
-	case VS_STATE_LOCKED: snprintf(want, sizeof want, "Locked"); break;
-	case VS_STATE_POWERED: snprintf(want, sizeof want, "Powered"); break;
-	case VS_STATE_UNPOWERED: snprintf(want, sizeof want, "Unpowered"); break;
-	default: abort(); /* Avoid or an invalid code */
+	case VS_STATE_ALARM:
+		snprintf(want, sizeof want, "Alarm-%03u", (unsigned)f->code);
+		break;
+	case VS_STATE_STUCK:
+		snprintf(want, sizeof want, "Stuck");
+		break;
+	case VS_STATE_PAUSED:
+		snprintf(want, sizeof want, "Paused");
+		break;
+	case VS_STATE_LOCKED:
+		snprintf(want, sizeof want, "Locked");
+		break;
+	case VS_STATE_POWERED:
+		snprintf(want, sizeof want, "Powered");
+		break;
+	case VS_STATE_UNPOWERED:
+		snprintf(want, sizeof want, "Unpowered");
+		break;
+	default:
+		abort(); /* Avoid or an invalid code */
 	}
 	if (strcmp(msg, want) != 0)
 		abort();
@@ -136,7 +153,8 @@ static void check_tick(void)
 	double ar = c->acc_limit_r_deg_s2 / hz / hz * q + 2;
 
 	check_state();
-	if (fabs((double)t->vx_pt) > vt || fabs((double)t->vy_pt) > vt || fabs((double)t->w_pt) > vr)
+	if (fabs((double)t->vx_pt) > vt || fabs((double)t->vy_pt) > vt ||
+	    fabs((double)t->w_pt) > vr)
 		abort(); /* velocity limit */
 	if (c->kinematics == VS_KIN_DIFF && t->vy_pt != 0)
 		abort();
@@ -158,11 +176,10 @@ static void check_tick(void)
 	 * to a few 1e-4 of the limit on single ticks; the spec's bound is 1 %.
 	 * The differential reference base is held exactly (below). */
 	double at_omni = at * 1.01;
-	bool trans_over =
-	    omni ? hypot(wx - prev_world[0], wy - prev_world[1]) > at_omni &&
-			   hypot((double)(t->vx_pt - prev_cmd.vx_pt),
-				 (double)(t->vy_pt - prev_cmd.vy_pt)) > at_omni
-		 : fabs((double)(t->vx_pt - prev_cmd.vx_pt)) > at;
+	bool trans_over = omni ? hypot(wx - prev_world[0], wy - prev_world[1]) > at_omni &&
+				     hypot((double)(t->vx_pt - prev_cmd.vx_pt),
+					   (double)(t->vy_pt - prev_cmd.vy_pt)) > at_omni
+			       : fabs((double)(t->vx_pt - prev_cmd.vx_pt)) > at;
 	/* Rotation: exact to 16 raw units on the differential base; a mecanum
 	 * line that turns as it goes interpolates its heading in Q32 fractions
 	 * of the line, steps of up to 2e-4 of the limit: the spec's 1 %. */
@@ -223,7 +240,9 @@ static bool act(rd_t *r, unsigned *ticks)
 	bool moved = false;
 
 	switch (a % 48) {
-	case 0: vs_clearAlarm(v); break;
+	case 0:
+		vs_clearAlarm(v);
+		break;
 	case 1: {
 		int16_t n = (int16_t)(u8(r) % 20) - 2, na;
 		vs_alarm_t al[20];
@@ -265,8 +284,11 @@ static bool act(rd_t *r, unsigned *ticks)
 		moved = vs_moveCruiseAbs(v, c);
 		break;
 	}
-	case 8: moved = vs_moveForward(v, dbl(r)); break;
-	case 9: case 10: {
+	case 8:
+		moved = vs_moveForward(v, dbl(r));
+		break;
+	case 9:
+	case 10: {
 		double x = dbl(r), y = dbl(r), w = dbl(r);
 		moved = vs_moveJog(v, x, y, w);
 		break;
@@ -281,57 +303,96 @@ static bool act(rd_t *r, unsigned *ticks)
 		moved = vs_moveLinearRel(v, p);
 		break;
 	}
-	case 13: moved = vs_moveTurn(v, dbl(r)); break;
-	case 14: vs_pause(v); break;
-	case 15: vs_resume(v); moved = true; break;
+	case 13:
+		moved = vs_moveTurn(v, dbl(r));
+		break;
+	case 14:
+		vs_pause(v);
+		break;
+	case 15:
+		vs_resume(v);
+		moved = true;
+		break;
 	case 16: {
 		vs_velocity_t acc = {dbl(r), dbl(r)};
 		vs_setAcceleration(v, acc);
 		break;
 	}
-	case 17: vs_setDigitalSensorLock(v, u8(r) & 1); break;
-	case 18: vs_setJogTimeout(v, (int16_t)(u8(r) << 8 | u8(r))); break;
+	case 17:
+		vs_setDigitalSensorLock(v, u8(r) & 1);
+		break;
+	case 18:
+		vs_setJogTimeout(v, (int16_t)(u8(r) << 8 | u8(r)));
+		break;
 	case 19: {
 		bool on = u8(r) & 1;
 		vs_setJoystick(v, on);
 		moved = on;
 		break;
 	}
-	case 20: vs_setOutput(v, u8(r) % 12, u32(r), u32(r)); break;
+	case 20:
+		vs_setOutput(v, u8(r) % 12, u32(r), u32(r));
+		break;
 	case 21: {
 		vs_position_t p = {dbl(r), dbl(r), dbl(r)};
 		vs_setPosition(v, p);
 		break;
 	}
-	case 22: vs_setPower(v, u8(r) & 1); break;
-	case 23: vs_setServo(v, u8(r) & 1); break;
+	case 22:
+		vs_setPower(v, u8(r) & 1);
+		break;
+	case 23:
+		vs_setServo(v, u8(r) & 1);
+		break;
 	case 24: {
 		vs_velocity_t vel = {dbl(r), dbl(r)};
 		vs_setVelocity(v, vel);
 		break;
 	}
-	case 25: vs_stop(v); break;
-	case 26: vs_unlock(v); break;
+	case 25:
+		vs_stop(v);
+		break;
+	case 26:
+		vs_unlock(v);
+		break;
 	/* hardware events */
-	case 27: pl->contact_inject = u8(r) & 1; break;
-	case 28: pl->obstacle = u8(r) & 1; break;
-	case 29: pl->caution = u8(r) & 1; break;
-	case 30: pl->estop = u8(r) & 1; break;
-	case 31: plant_set_relay_mode(pl, (plant_relay_mode_t)(u8(r) % 3)); break;
+	case 27:
+		pl->contact_inject = u8(r) & 1;
+		break;
+	case 28:
+		pl->obstacle = u8(r) & 1;
+		break;
+	case 29:
+		pl->caution = u8(r) & 1;
+		break;
+	case 30:
+		pl->estop = u8(r) & 1;
+		break;
+	case 31:
+		plant_set_relay_mode(pl, (plant_relay_mode_t)(u8(r) % 3));
+		break;
 	case 32: {
 		uint8_t ax = u8(r) % pl->n;
 		switch (u8(r) % 4) {
-		case 0: plant_drive_fault(pl, ax, (uint16_t)(u8(r) | 1)); break;
-		case 1: plant_drive_ok(pl, ax); break;
+		case 0:
+			plant_drive_fault(pl, ax, (uint16_t)(u8(r) | 1));
+			break;
+		case 1:
+			plant_drive_ok(pl, ax);
+			break;
 		case 2:
 			plant_drive_stuck(pl, ax, true);
 			encoder_frozen = true;
 			break;
-		default: plant_drive_silent(pl, ax, true); break;
+		default:
+			plant_drive_silent(pl, ax, true);
+			break;
 		}
 		break;
 	}
-	case 33: plant_set_battery_ocv(pl, 18.0 + (double)(u8(r) % 80) * 0.1); break;
+	case 33:
+		plant_set_battery_ocv(pl, 18.0 + (double)(u8(r) % 80) * 0.1);
+		break;
 	case 34: {
 		bool present = u8(r) % 8 != 0;
 		double x = (double)(int8_t)u8(r) / 127.0, y = (double)(int8_t)u8(r) / 127.0;
@@ -339,7 +400,9 @@ static bool act(rd_t *r, unsigned *ticks)
 		plant_set_joystick(pl, x, y, w, present);
 		break;
 	}
-	case 35: plant_set_input(pl, u8(r) % 6, u32(r)); break;
+	case 35:
+		plant_set_input(pl, u8(r) % 6, u32(r));
+		break;
 	/* time: most actions are ticks */
 	default: {
 		unsigned n = 1u + (unsigned)u8(r) * ((a & 1) ? 8u : 1u);

@@ -140,7 +140,7 @@ static int tc_set_inputs(const char *val, const struct kernel_param *kp)
 	/* Before the chip is registered (load-time parameter) nothing listens. */
 	if (!tc_domain)
 		return 0;
-	for_each_set_bit(offset, &changed, TC_NGPIO) {
+	for_each_set_bit (offset, &changed, TC_NGPIO) {
 		unsigned int irq = irq_find_mapping(tc_domain, offset);
 		struct irq_data *d = irq ? irq_get_irq_data(irq) : NULL;
 		unsigned int type, edge;
