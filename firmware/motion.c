@@ -66,8 +66,13 @@ void motion_set_accel(motion_t *m, q32_t at, q32_t ar)
 		m->a_t_pt2 = 1;
 	if (m->a_r_pt2 < 1)
 		m->a_r_pt2 = 1;
-	/* Queued corner speeds follow the new braking rate (the corners'
-	 * shapes and rotation caps keep the rate they were planned with). */
+	/* Queued corners keep their shapes; their caps follow the new
+	 * rotational rate, and the corner speeds the new braking rate. */
+	for (uint8_t i = 0; i < m->q_count; i++) {
+		motion_cmd_t *c = q_at(m, i);
+		if (c->kind == MCMD_CRUISE && c->has_corner && c->corner.lh_mm != 0)
+			traj_corner_rates(&c->corner, m->a_r_pt2);
+	}
 	backward_pass(m);
 }
 
@@ -875,8 +880,7 @@ static void piece_advance(motion_t *m, q32_t s)
 			/* The step in from the line: h(s / 2) = h1 / 4 exactly. */
 			hm = h1 / 4;
 		} else if (s <= lh || s_old >= lh) {
-			/* ds / Lh, Q30 (ds <= 2 Lh: the product fits) */
-			int64_t du = fx_mul_fit(ds, g->corner.inv_lh);
+			int64_t du = traj_corner_u(&g->corner, ds); /* ds / Lh, Q30 */
 			int32_t du2 = (int32_t)((du * du) >> 30);
 			q32_t corr = fx_mul_q30(g->corner.phi_deg, du2) / 8;
 			hm = (g->h + h1) / 2 + (s <= lh ? -corr : corr);

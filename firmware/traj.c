@@ -144,15 +144,21 @@ bool traj_corner_plan(traj_corner_t *c, q32_t phi_deg, q32_t t_avail_mm, q32_t a
 	c->phi_deg = phi_deg;
 	c->t_mm = t_avail_mm;
 	c->lh_mm = fx_div(t_avail_mm, ratio * 4); /* ratio is Q30; times 4 makes it Q32 */
-	if (c->lh_mm <= 0)
-		return false;
+	if (c->lh_mm < ((q32_t)1 << TRAJ_INV_LH_SH))
+		return false; /* no room */
 	c->k_mm_deg = fx_div(c->lh_mm, aphi);
-	c->inv_lh = (q32_t)(((uint64_t)1 << 62) / (uint64_t)c->lh_mm);
+	c->inv_lh = fx_div((q32_t)1 << (30 + TRAJ_INV_LH_SH), c->lh_mm);
+	traj_corner_rates(c, ar_pt2);
+	return true;
+}
+
+void traj_corner_rates(traj_corner_t *c, q32_t ar_pt2)
+{
+	q32_t aphi = fx_abs64(c->phi_deg);
 	/* sqrt(ar / (2 phi)) in 1/tick, Q32. The ratio is tiny (1e-6 at 1 kHz):
 	 * form it with 24 extra fraction bits before the square root. */
 	q32_t ratio_q56 = fx_div(ar_pt2 << 24, 2 * aphi);
 	q32_t rt = (q32_t)(fx_isqrt64((uint64_t)ratio_q56) << 4);
 	c->vacc_pt = fx_mul(c->lh_mm, rt);
 	c->acc_pt2 = fx_mul(ar_pt2, c->k_mm_deg) / 2;
-	return true;
 }

@@ -93,13 +93,29 @@ typedef struct {
 	q32_t k_mm_deg; /* Lh / |phi|: speed cap per unit rotation rate */
 	q32_t vacc_pt;	/* Lh sqrt(ar / (2 |phi|)): speed cap from rotational acceleration */
 	q32_t acc_pt2;	/* ar Lh / (2 |phi|): path acceleration cap in the corner */
-	q32_t inv_lh;	/* 2^62 / Lh (raw): s * inv_lh >> 32 is s / Lh in Q30 */
+	q32_t inv_lh;	/* 2^(62 + TRAJ_INV_LH_SH) / Lh (raw): see traj_corner_u */
 } traj_corner_t;
+
+/* The reciprocal of Lh carries 20 bits more than s / Lh in Q30 needs: 30 or
+ * more significant bits for any Lh up to 2^20 mm (the bare 2^62 / Lh had 22
+ * at Lh = 168 mm, and the two clothoid halves met with a 2.5e-5 degree
+ * step). Lh of at least 2^20 raw (2.4e-4 mm) keeps it below 2^63. */
+#define TRAJ_INV_LH_SH 20
+
+/* x / Lh in Q30 for 0 <= x <= 2 Lh (the product stays below 2^52). */
+static inline int64_t traj_corner_u(const traj_corner_t *c, q32_t x)
+{
+	return fx_mul_fit(x, c->inv_lh) >> TRAJ_INV_LH_SH;
+}
 
 /* Plans a corner: returns false when no blend is possible (deflection too
  * close to a reversal, or no room). ar_pt2 is the rotational acceleration
  * in force (deg/tick^2, Q32). */
 bool traj_corner_plan(traj_corner_t *c, q32_t phi_deg, q32_t t_avail_mm, q32_t ar_pt2);
+/* The caps of a planned corner that follow from ar_pt2 (> 0): vacc_pt and
+ * acc_pt2. The shape does not depend on it, so a new rotational
+ * acceleration changes only these. */
+void traj_corner_rates(traj_corner_t *c, q32_t ar_pt2);
 /* Heading change from the corner start at path length s (0..2 Lh); inline,
  * as every corner tick evaluates it. */
 static inline q32_t traj_corner_heading(const traj_corner_t *c, q32_t s)
@@ -112,7 +128,7 @@ static inline q32_t traj_corner_heading(const traj_corner_t *c, q32_t s)
 		return c->phi_deg;
 	/* u = s / Lh (Q30) by the reciprocal: no division on the tick path. */
 	bool second = s > lh;
-	int64_t u = fx_mul_fit(second ? 2 * lh - s : s, c->inv_lh); /* <= 2^31: fits */
+	int64_t u = traj_corner_u(c, second ? 2 * lh - s : s);
 	if (u > FX_Q30_ONE)
 		u = FX_Q30_ONE;
 	int32_t u2 = (int32_t)((u * u) >> 30);

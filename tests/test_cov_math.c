@@ -4,6 +4,7 @@
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
+#include <math.h>
 #include <stdint.h>
 
 #include <cmocka.h>
@@ -87,11 +88,22 @@ static void test_corner_refused_and_ends(void **state)
 	assert_int_equal(traj_corner_heading(&c, 2 * c.lh_mm), fx_from_int(90));
 	assert_int_equal(traj_corner_heading(&c, 2 * c.lh_mm + FX_ONE), fx_from_int(90));
 	/* Half way: half the deflection (the two clothoid halves meet). s / Lh
-	 * comes from the truncated reciprocal, low by at most 1 / inv_lh
-	 * relative, so psi u^2 is low by at most 2 psi / inv_lh (~7e-6 deg). */
+	 * comes from the truncated reciprocal, at most one Q30 unit low, so
+	 * psi u^2 is low by at most 2 psi 2^-30 (360 raw units, 8e-8 deg). */
 	q32_t mid = traj_corner_heading(&c, c.lh_mm);
-	q32_t tol = 2 * fx_from_int(45) / c.inv_lh + 2;
-	assert_true(mid >= fx_from_int(45) - tol && mid <= fx_from_int(45));
+	assert_true(mid >= fx_from_int(45) - 362 && mid <= fx_from_int(45));
+	/* Across the join, Lh / 1000 either side: the heading change is
+	 * 2 psi (2e - e^2) with e = 1/1000, to 1e-7 deg (the reciprocal of Lh
+	 * with 22 significant bits put a 2.5e-5 deg step here). */
+	q32_t x = c.lh_mm / 1000;
+	double e = (double)x / (double)c.lh_mm;
+	double step =
+	    (double)(traj_corner_heading(&c, c.lh_mm + x) - traj_corner_heading(&c, c.lh_mm - x)) /
+	    FX_ONE;
+	assert_true(fabs(step - 90.0 * (2 * e - e * e)) < 1e-7);
+	/* The smallest corner the reciprocal allows: 2^20 raw of half length. */
+	traj_corner_t small;
+	assert_false(traj_corner_plan(&small, fx_from_int(90), 1 << 19, ar));
 }
 
 /* mm_per_deg 2, deg_per_mm 0.5, one count per mm, 1 kHz, no feedback. */

@@ -377,6 +377,34 @@ static void test_accel_lowered_while_paused(void **state)
 	assert_true(r.ax_max <= 100.0 * 1.00001);
 }
 
+/* setAcceleration lowering the rotational rate while paused: the queued
+ * corner keeps its shape and its caps follow the new rate, so no tick of
+ * the 90 degree corner turns faster than the new limit allows. */
+static void test_rot_accel_lowered_while_paused(void **state)
+{
+	(void)state;
+	rig_t r;
+	rig_init(&r, MOTION_KIN_DIFF);
+	motion_pause(&r.m);
+	assert_true(motion_cruise_abs(&r.m, q(1000), 0));
+	assert_true(motion_cruise_abs(&r.m, q(1000), q(1000)));
+	motion_set_accel(&r.m, q(500), q(30));
+	motion_resume(&r.m);
+	uint32_t stops = 0;
+	while (motion_has_work(&r.m) && r.ticks < 60000) {
+		rig_tick(&r);
+		if (motion_has_work(&r.m) && r.vx == 0 && r.w == 0 && r.ticks > 10)
+			stops++;
+	}
+	printf("rotational rate lowered to 30 deg/s^2: aw %.3f, w %.3f, ax %.3f\n", r.aw_max,
+	       r.w_max, r.ax_max);
+	assert_int_equal(stops, 0);
+	assert_int_equal(r.m.ref.x_mm, q(1000));
+	assert_int_equal(r.m.ref.y_mm, q(1000));
+	assert_true(r.aw_max <= 30.0 * 1.00001);
+	assert_true(r.ax_max <= 500.0 * 1.00001);
+}
+
 /* Redefining the pose mid-move keeps the motion's physical course: no
  * velocity step, and the end lands where it would have, in the new frame. */
 static void test_set_pose_while_moving(void **state)
@@ -524,6 +552,7 @@ int main(void)
 	    cmocka_unit_test(test_set_pose_during_arc),
 	    cmocka_unit_test(test_limits_change_mid_piece),
 	    cmocka_unit_test(test_accel_lowered_while_paused),
+	    cmocka_unit_test(test_rot_accel_lowered_while_paused),
 	};
 	return cmocka_run_group_tests_name("motion", tests, NULL, NULL);
 }
