@@ -43,6 +43,7 @@ enum {
 	ALM_W_CONTACT = 150,	   /* contact sensor tripped: unit Locked */
 	ALM_W_OBSTACLE = 151,	   /* obstacle input tripped: unit Stuck */
 	ALM_W_JOYSTICK_LOST = 152, /* joystick lost while in use: stopped */
+	ALM_W_LINK_LOST = 153,	   /* no request within link_timeout_ms: stopped */
 };
 
 /* Fault codes. */
@@ -55,7 +56,8 @@ enum {
 	ALM_F_POWER_LOST = 206,	   /* main power dropped while on */
 	ALM_F_BATTERY_CRITICAL = 207,
 	ALM_F_ESTOP = 208,
-	ALM_F_OVERRUN = 209, /* control tick overran its period */
+	ALM_F_OVERRUN = 209, /* the loop's own work took longer than a period */
+	ALM_F_LOOP_STALL = 210, /* a tick came later than loop_late_ms */
 };
 
 typedef struct {

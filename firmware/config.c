@@ -35,6 +35,8 @@ void vs_config_defaults(vs_config_t *c)
 	c->following_error_mm = 50.0;
 	c->encoder_stuck_ms = 300;
 	c->drive_timeout_ms = 50;
+	c->loop_late_ms = 20;
+	c->link_timeout_ms = 1000;
 
 	c->cruise_blend_mm = 200.0;
 	c->caution_vel_t_mm_s = 200.0;
@@ -149,6 +151,10 @@ int vs_config_check(const vs_config_t *c, const char **field)
 		FAIL(-1, "encoder_stuck_ms");
 	if (c->drive_timeout_ms < 1 || c->drive_timeout_ms > 60000)
 		FAIL(-1, "drive_timeout_ms");
+	if (c->loop_late_ms < 1 || c->loop_late_ms > 1000)
+		FAIL(-1, "loop_late_ms");
+	if (c->link_timeout_ms > 60000)
+		FAIL(-1, "link_timeout_ms");
 
 	if (!in_range(c->cruise_blend_mm, 0.0, 10000.0))
 		FAIL(-1, "cruise_blend_mm");

@@ -53,6 +53,12 @@ typedef struct {
 	double following_error_mm; /* measured vs commanded wheel travel */
 	uint32_t encoder_stuck_ms; /* commanded motion with no encoder change */
 	uint32_t drive_timeout_ms; /* drive replies missing this long: fault */
+	/* A tick later than its period by more than this: the loop stalled
+	 * (fault 210). Lateness below it is counted, not a fault. */
+	uint32_t loop_late_ms;
+	/* Link watchdog: motion stops when no valid request arrived on any link
+	 * for this long (warning 153). 0 = off. */
+	uint32_t link_timeout_ms;
 
 	/* Cruise blending: how far the curve may start before a waypoint. */
 	double cruise_blend_mm;

@@ -455,24 +455,90 @@ void vehicle_diag(const vehicle_t *v, vs_diag_t *d)
 		d->wheel_cps_q8[i] = v->wheel_cps_q8[i];
 	d->ticks = v->ticks;
 	d->overruns = v->overruns;
+	d->late_ticks = v->late_ticks;
+	d->max_late_us = v->max_late_us;
 	d->queue_len = motion_queue_len(&v->motion);
 	d->mode = motion_mode(&v->motion);
 }
 
 /* ---- the control tick ------------------------------------------------- */
 
-static void check_overrun(vehicle_t *v, uint32_t now_us)
+/* Reports are out of line (cold): their text buffers and calls stay off
+ * the every-tick path. */
+#define COLD __attribute__((cold, noinline))
+
+static COLD void loop_stalled(vehicle_t *v, uint32_t late_us)
+{
+	char s[VS_ALARM_SOURCE_MAX];
+	size_t pos = put_str(s, sizeof s, 0, "control loop stalled ");
+	pos = put_dec(s, sizeof s, pos, late_us / 1000u, 1);
+	put_str(s, sizeof s, pos, " ms");
+	raise_fault(v, ALM_F_LOOP_STALL, s);
+}
+
+/* Wake-up lateness is the platform's doing (a busy host, a blocking call):
+ * the reference advances by ticks, so a late tick only holds it while the
+ * drives keep their last setpoint, and the wheel runs ahead by speed times
+ * lateness, which the position loop takes back. Late ticks are counted;
+ * only a stall longer than loop_late_ms stops the unit (docs/linux.md). */
+static void check_lateness(vehicle_t *v, uint32_t now_us)
 {
 	if (v->have_now) {
-		int32_t dt = (int32_t)(now_us - v->last_now_us);
-		/* Late by more than half a period (wrap-safe difference). */
-		if ((int64_t)dt * 2 > (int64_t)v->period_us * 3) {
-			v->overruns++;
-			raise_fault(v, ALM_F_OVERRUN, "control tick overrun");
+		/* Wrap-safe difference; an early tick is not late. */
+		int32_t late = (int32_t)(now_us - v->last_now_us) - (int32_t)v->period_us;
+		if (late > 0 && (uint32_t)late * 2u > v->period_us) {
+			v->late_ticks++;
+			if ((uint32_t)late > v->max_late_us)
+				v->max_late_us = (uint32_t)late;
+			if ((uint32_t)late > v->loop_late_us)
+				loop_stalled(v, (uint32_t)late);
 		}
 	}
 	v->last_now_us = now_us;
 	v->have_now = true;
+}
+
+void vehicle_tick_busy(vehicle_t *v, uint32_t busy_us)
+{
+	if (busy_us > v->period_us) {
+		v->overruns++;
+		raise_fault(v, ALM_F_OVERRUN, "control tick overrun");
+	}
+}
+
+void vehicle_link_heard(vehicle_t *v, vs_link_id_t link)
+{
+	v->link_last = (uint8_t)link;
+	v->link_silent_ticks = 0;
+}
+
+static COLD void link_lost(vehicle_t *v)
+{
+	static const char *const names[] = {"console", "frames", "CAN"};
+	char s[VS_ALARM_SOURCE_MAX];
+	size_t pos = put_str(s, sizeof s, 0, "link lost: ");
+	pos = put_str(s, sizeof s, pos, names[v->link_last < 3 ? v->link_last : 0]);
+	pos = put_str(s, sizeof s, pos, " silent ");
+	pos = put_dec(s, sizeof s, pos, v->cfg.link_timeout_ms, 1);
+	put_str(s, sizeof s, pos, " ms");
+	motion_stop(&v->motion);
+	alarm_raise(&v->alarms, ALM_W_LINK_LOST, s);
+}
+
+/* Link watchdog: motion commanded from a host stops when the host falls
+ * silent. The joystick drives locally and a paused unit holds still, so
+ * neither needs the host; the stop discards the queue and nothing resumes
+ * by itself. */
+static void supervise_link(vehicle_t *v)
+{
+	if (v->link_silent_ticks < UINT32_MAX)
+		v->link_silent_ticks++;
+	if (v->link_timeout_ticks == 0 || v->link_silent_ticks < v->link_timeout_ticks)
+		return;
+	if (v->joystick_on || motion_is_paused(&v->motion) || !motion_has_work(&v->motion))
+		return;
+	v->link_silent_ticks = 0;
+	link_lost(v);
 }
 
 static void encoder_stuck(vehicle_t *v, uint8_t i)
@@ -495,10 +561,6 @@ static inline void supervise_encoder(vehicle_t *v, uint8_t i, bool moved)
 	else if (++v->encoder_still_ticks[i] >= v->encoder_stuck_ticks)
 		encoder_stuck(v, i);
 }
-
-/* Reports are out of line (cold): their text buffers and calls stay off
- * the every-tick path. */
-#define COLD __attribute__((cold, noinline))
 
 static COLD void drive_silent_report(vehicle_t *v, uint8_t i)
 {
@@ -670,9 +732,10 @@ static COLD void following_fault(vehicle_t *v, int64_t ferr)
 
 void vehicle_tick(vehicle_t *v, uint32_t now_us)
 {
-	check_overrun(v, now_us);
+	check_lateness(v, now_us);
 	sample_drives(v);
 	supervise_inputs(v);
+	supervise_link(v);
 	feed_joystick(v);
 
 	fx_twist_t cmd;

@@ -55,8 +55,20 @@ typedef struct vehicle vehicle_t;
 /* Lifecycle. vehicle_init validates cfg (returns a negative value and the
  * field name through *bad_field when invalid) and leaves the unit Unpowered. */
 int vehicle_init(vehicle_t *v, const vs_config_t *cfg, const vs_hal_t *hal, const char **bad_field);
-/* One control period. now_us: a free-running microsecond clock (wraps). */
+/* One control period. now_us: a free-running microsecond clock (wraps).
+ * The time between two ticks is supervised: over 1.5 periods the tick is
+ * counted late, over a period plus loop_late_ms the loop has stalled (fault
+ * 210). The reference advances by ticks, so lateness only delays it. */
 void vehicle_tick(vehicle_t *v, uint32_t now_us);
+/* The platform's measure of its own work in the last period (the tick and
+ * the link service, on the CPU, without time taken by other tasks): over a
+ * period is fault 209, the loop over budget. */
+void vehicle_tick_busy(vehicle_t *v, uint32_t busy_us);
+
+/* The links a request can arrive on, for the link watchdog. */
+typedef enum { VS_LINK_CONSOLE = 0, VS_LINK_FRAMES = 1, VS_LINK_CAN = 2 } vs_link_id_t;
+/* A valid request arrived on a link: the link watchdog restarts. */
+void vehicle_link_heard(vehicle_t *v, vs_link_id_t link);
 
 /* The operations, in spec order. */
 bool vs_clearAlarm(vehicle_t *v);
@@ -105,7 +117,9 @@ typedef struct {
 	fx_twist_t cmd_twist_pt;	   /* commanded body velocity per tick */
 	int32_t wheel_cps_q8[VS_MAX_AXES]; /* drive setpoints */
 	uint32_t ticks;			   /* control ticks since init */
-	uint32_t overruns;		   /* ticks that arrived late */
+	uint32_t overruns;		   /* periods whose work took over a period */
+	uint32_t late_ticks;		   /* ticks over half a period late */
+	uint32_t max_late_us;		   /* the latest tick, past its period */
 	uint8_t queue_len;
 	uint8_t mode; /* motion_mode_t */
 } vs_diag_t;
@@ -143,7 +157,10 @@ struct vehicle {
 	bool powered, servo, locked, stuck, sensor_lock, joystick_on;
 	uint32_t out_shadow[VS_MAX_IO];
 	uint32_t ticks, overruns, last_now_us;
+	uint32_t late_ticks, max_late_us, loop_late_us;
 	bool have_now;
+	uint8_t link_last; /* vs_link_id_t heard last */
+	uint32_t link_timeout_ticks, link_silent_ticks;
 	int32_t wheel_cps_q8[VS_MAX_AXES];
 	fx_twist_t cmd;
 	/* Latest drive samples; .enabled also follows drive_enable commands. */

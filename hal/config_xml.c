@@ -58,6 +58,8 @@ static const field_t fields[] = {
     F("supervision", "following_error_mm", T_DOUBLE, following_error_mm, 0, 10000, true),
     F("supervision", "encoder_stuck_ms", T_U32, encoder_stuck_ms, 10, 60000, false),
     F("supervision", "drive_timeout_ms", T_U32, drive_timeout_ms, 1, 60000, false),
+    F("supervision", "loop_late_ms", T_U32, loop_late_ms, 1, 1000, false),
+    F("supervision", "link_timeout_ms", T_U32, link_timeout_ms, 0, 60000, false),
     F("motion", "cruise_blend_mm", T_DOUBLE, cruise_blend_mm, 0, 10000, false),
     F("motion", "caution_vel_t_mm_s", T_DOUBLE, caution_vel_t_mm_s, 0, 10000, false),
     F("battery", "low_v", T_DOUBLE, battery_low_v, 0, 1000, false),

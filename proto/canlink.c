@@ -320,6 +320,7 @@ static void handle_request(canlink_t *c, const uint8_t *req, size_t len)
 		/* Retransmission: same sequence number, same request. The cached
 		 * response in tx_buf is sent again; the operation does not run. */
 		c->stats.replays++;
+		vehicle_link_heard(c->v, VS_LINK_CAN);
 		abandon_tx(c);
 		tx_start(c, c->tx_buf, c->tx_len_last);
 		return;
@@ -336,6 +337,7 @@ static void handle_request(canlink_t *c, const uint8_t *req, size_t len)
 		return;
 	}
 	c->stats.requests++;
+	vehicle_link_heard(c->v, VS_LINK_CAN);
 	c->tx_buf[0] = req[0];
 	c->tx_buf[1] = req[1];
 	c->tx_buf[2] = WIRE_ST_OK;

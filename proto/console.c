@@ -313,8 +313,9 @@ static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_
 
 			memset(&d, 0, sizeof(d));
 			vehicle_diag(c->v, &d);
-			rb_printf(r, "ok ticks %lu overruns %lu mode %s queue %u ref",
+			rb_printf(r, "ok ticks %lu overruns %lu late %lu max_late_us %lu mode %s queue %u ref",
 				  (unsigned long)d.ticks, (unsigned long)d.overruns,
+				  (unsigned long)d.late_ticks, (unsigned long)d.max_late_us,
 				  mode_name(d.mode), (unsigned)d.queue_len);
 			rb_pose(r, &d.ref_pose);
 			rb_puts(r, " odom");
@@ -398,7 +399,10 @@ static bool exec_line(console_t *c, const char *line, size_t len, char *reply, s
 		if (ntok > CONSOLE_ARGV_MAX)
 			return reply_error(c, &r, "%d %s: too many arguments (%u)", CONSOLE_E_ARITY,
 					   argv[0], ntok - 1);
-		return exec_extra(c, (int)ntok, argv, ntok, &r);
+		bool said = exec_extra(c, (int)ntok, argv, ntok, &r);
+		if (said && r.len >= 2 && reply[0] == 'o' && reply[1] == 'k')
+			vehicle_link_heard(c->v, VS_LINK_CONSOLE);
+		return said;
 	}
 
 	d = cmd_by_name(argv[0]);
@@ -454,6 +458,7 @@ static bool exec_line(console_t *c, const char *line, size_t len, char *reply, s
 		}
 	}
 
+	vehicle_link_heard(c->v, VS_LINK_CONSOLE);
 	ok = cmd_invoke(c->v, d, in, out, &scratch);
 	rb_puts(&r, ok ? "ok true" : "ok false");
 	for (unsigned k = 0; k < d->n_out; k++)

@@ -198,6 +198,7 @@ static void srv_frame(void *ctx, const frame_t *f)
 	}
 	if (s->have_last && f->seq == s->last_seq && f->op == s->last_op && f->crc == s->last_crc) {
 		s->st.duplicates++;
+		vehicle_link_heard(s->v, VS_LINK_FRAMES);
 		if (s->write)
 			s->write(s->wctx, s->last_resp, s->last_len);
 		return;
@@ -208,6 +209,7 @@ static void srv_frame(void *ctx, const frame_t *f)
 		return;
 	}
 	s->st.executed++;
+	vehicle_link_heard(s->v, VS_LINK_FRAMES);
 	s->last_len = frame_encode_response(s->last_resp, sizeof(s->last_resp), f->seq, f->op,
 					    WIRE_ST_OK, resp, n);
 	s->have_last = s->last_len > 0;

@@ -98,6 +98,9 @@ static void boot_sim(sim_t *s, double wheel_diameter_mm)
 	plant_params_t pp;
 
 	vs_config_defaults(&cfg);
+	/* Time passes in lockstep waits with no request; the link watchdog
+	 * has its own tests. */
+	cfg.link_timeout_ms = 0;
 	if (wheel_diameter_mm > 0)
 		cfg.wheel_diameter_mm = wheel_diameter_mm;
 	plant_params_default(&pp);

@@ -39,6 +39,9 @@ static int setup(void **state)
 
 	(void)state;
 	vs_config_defaults(&cfg);
+	/* Time passes in lockstep waits with no request; the link watchdog
+	 * has its own tests. */
+	cfg.link_timeout_ms = 0;
 	plant_params_default(&pp);
 	return sim_init(&S, &cfg, &pp);
 }
@@ -473,33 +476,58 @@ static void test_estop(void **state)
 	move_works();
 }
 
-/* A control tick 1.5 periods after the previous one is on time; later is
- * an overrun (the plant keeps moving while the tick is late). */
+/* A tick late_us after its period (the plant keeps moving meanwhile); the
+ * simulator's period count skips the whole periods missed. */
 static void late_tick(uint32_t late_us)
 {
 	plant_step(&S.plant, late_us);
 	S.now_us += late_us;
+	S.ticks += late_us / 1000u;
 	sim_tick(&S);
 }
 
+/* A late wake-up is counted and the motion goes on; a stall past
+ * loop_late_ms (20 ms) halts. */
+static void test_loop_stall(void **state)
+{
+	(void)state;
+	cruising();
+	late_tick(5000);
+	EXPECT("getActiveAlarm 0", "ok true 0 0");
+	assert_true(fabs(cmd_mm_s() - CRUISE_MM_S) < 1e-6);
+	EXPECT("getState", "ok true 17 \"Busy\"");
+	late_tick(20000);
+	EXPECT("getActiveAlarm 0", "ok true 0 0");
+	assert_true(fabs(cmd_mm_s() - CRUISE_MM_S) < 1e-6);
+	assert_memory_equal(ex("$diag"), "ok ticks ", 9);
+	assert_non_null(strstr(rep, " overruns 0 late 2 max_late_us 20000 mode path "));
+	sim_run_ms(&S, 10);
+	late_tick(20001);
+	assert_true(S.vehicle.cmd.vx_pt == 0);
+	drives_off();
+	EXPECT("getActiveAlarm 16", "ok true 1 1 210 fault \"control loop stalled 20 ms\"");
+	EXPECT("getState", "ok true 19 \"Alarm-210\"");
+	servo_is("false");
+	assert_true(S.plant.relay_closed);
+	stays_put(500);
+	EXPECT("clearAlarm", "ok true");
+	EXPECT("setServo true", "ok true");
+	move_works();
+}
+
+/* The loop's own work over a period (measured by the platform) halts. */
 static void test_tick_overrun(void **state)
 {
 	(void)state;
 	cruising();
-	/* 1500 us after the previous tick: still on time */
-	late_tick(500);
+	vehicle_tick_busy(&S.vehicle, 1000);
 	EXPECT("getActiveAlarm 0", "ok true 0 0");
-	assert_true(fabs(cmd_mm_s() - CRUISE_MM_S) < 1e-6);
-	sim_run_ms(&S, 10);
-	late_tick(501);
-	assert_true(S.vehicle.cmd.vx_pt == 0);
-	drives_off();
+	vehicle_tick_busy(&S.vehicle, 1001);
+	expect_halt_next_tick();
 	EXPECT("getActiveAlarm 16", "ok true 1 1 209 fault \"control tick overrun\"");
 	EXPECT("getState", "ok true 19 \"Alarm-209\"");
-	servo_is("false");
-	assert_true(S.plant.relay_closed);
 	assert_memory_equal(ex("$diag"), "ok ticks ", 9);
-	assert_non_null(strstr(rep, " overruns 1 mode idle queue 0 "));
+	assert_non_null(strstr(rep, " overruns 1 late 0 max_late_us 0 mode idle queue 0 "));
 	stays_put(500);
 	EXPECT("clearAlarm", "ok true");
 	EXPECT("setServo true", "ok true");
@@ -601,6 +629,109 @@ static void test_link_loss_during_jog(void **state)
 	assert_true(fabs(cmd_mm_s() - 100.0) < 1e-6);
 }
 
+/* The link watchdog (link_timeout_ms 1000) on: the host below polls
+ * getState every 500 ms while it wants the motion to go on. */
+static int setup_watchdog(void **state)
+{
+	vs_config_t cfg;
+	plant_params_t pp;
+
+	(void)state;
+	vs_config_defaults(&cfg);
+	assert_int_equal(cfg.link_timeout_ms, 1000);
+	plant_params_default(&pp);
+	return sim_init(&S, &cfg, &pp);
+}
+
+static void keep_alive(const char *line, const char *reply, unsigned ms)
+{
+	for (unsigned t = 0; t < ms; t += 500) {
+		if (reply)
+			EXPECT(line, reply);
+		else
+			assert_memory_equal(ex(line), "ok ", 3);
+		sim_run_ms(&S, 500);
+	}
+}
+
+/* The host falls silent mid-route: 1000 ticks after its last valid
+ * request the unit brakes at the acceleration limit, the queue is gone,
+ * warning 153 names the link, and it never moves again by itself. */
+static void test_link_watchdog_stops_route(void **state)
+{
+	double x0, y0, th0, x1, y1, th1;
+
+	(void)state;
+	ready();
+	EXPECT("moveForward 20000", "ok true");
+	EXPECT("moveLinearAbs 0 0 0", "ok true");
+	/* getState and a bring-up line keep it going for 3 s */
+	keep_alive("getState", "ok true 17 \"Busy\"", 2000);
+	keep_alive("$version", NULL, 1000);
+	assert_true(fabs(cmd_mm_s() - CRUISE_MM_S) < 1e-6);
+	EXPECT("getState", "ok true 17 \"Busy\""); /* the last valid request */
+	plant_pose(&S.plant, &x0, &y0, &th0);
+	for (unsigned t = 1; t < 1000; t++) {
+		sim_tick(&S);
+		assert_true(fabs(cmd_mm_s() - CRUISE_MM_S) < 1e-6);
+		/* a line that is not a valid request does not count */
+		if (t == 500)
+			EXPECT("moveTurn 0 0", "error 2 moveTurn takes 1 argument, got 2");
+	}
+	/* tick 1000: braking at 1000 mm/s^2, 500 ticks */
+	assert_in_range(expect_decel(ACC_LIMIT, 2000), 500, 501);
+	sim_run_ms(&S, 200); /* the motors' lag settles */
+	plant_pose(&S.plant, &x1, &y1, &th1);
+	/* timeout x v + v^2 / (2 a_max) + 2 ticks of travel */
+	double bound = 1.0 * CRUISE_MM_S + CRUISE_MM_S * CRUISE_MM_S / (2.0 * ACC_LIMIT) +
+		       2.0 * CRUISE_MM_S / TICK_HZ;
+	double travel = x1 - x0;
+	assert_true(travel <= bound);
+	assert_true(travel > bound - 3.0);
+	EXPECT("getActiveAlarm 16",
+	       "ok true 1 1 153 warning \"link lost: console silent 1000 ms\"");
+	EXPECT("getState", "ok true 18 \"Warning-153\"");
+	assert_memory_equal(ex("$diag"), "ok ticks ", 9);
+	assert_non_null(strstr(rep, " mode idle queue 0 "));
+	servo_is("true");
+	stays_put(3000);
+	/* a new command runs normally; the warning stays until cleared */
+	plant_pose(&S.plant, &x0, &y0, &th0);
+	EXPECT("moveForward 100", "ok true");
+	sim_run_ms(&S, 1500);
+	plant_pose(&S.plant, &x1, &y1, &th1);
+	assert_true(fabs(x1 - x0 - 100.0) < 1.0);
+	EXPECT("getState", "ok true 18 \"Warning-153\"");
+	EXPECT("clearAlarm", "ok true");
+	EXPECT("getState", "ok true 16 \"Ready\"");
+}
+
+/* Idle and paused units hold still without a host: no trip. A resumed
+ * route goes on while the host polls and runs to its end. */
+static void test_link_watchdog_idle_and_paused(void **state)
+{
+	(void)state;
+	ready();
+	sim_run_ms(&S, 5000);
+	EXPECT("getActiveAlarm 0", "ok true 0 0");
+	EXPECT("moveForward 2000", "ok true");
+	keep_alive("getState", "ok true 17 \"Busy\"", 1000);
+	EXPECT("pause", "ok true");
+	sim_run_ms(&S, 5000);
+	EXPECT("getActiveAlarm 0", "ok true 0 0");
+	EXPECT("getState", "ok true 21 \"Paused\"");
+	EXPECT("resume", "ok true");
+	unsigned polls = 0;
+	while (strcmp(ex("getState"), "ok true 16 \"Ready\"") != 0 && polls++ < 20) {
+		assert_string_equal(rep, "ok true 17 \"Busy\"");
+		sim_run_ms(&S, 500);
+	}
+	EXPECT("getActiveAlarm 0", "ok true 0 0");
+	double x, y, th;
+	assert_int_equal(sscanf(ex("getPosition"), "ok true %lf %lf %lf", &x, &y, &th), 3);
+	assert_true(fabs(x - 2000.0) < 0.05 && fabs(y) < 0.05 && fabs(th) < 0.01);
+}
+
 /* More path commands than the queue holds: the 33rd and later are refused
  * with false and 125, and the 32 accepted ones all run, in order. */
 static void test_command_flood(void **state)
@@ -678,11 +809,14 @@ int main(void)
 	    T(test_battery_low_warning),
 	    T(test_battery_critical),
 	    T(test_estop),
+	    T(test_loop_stall),
 	    T(test_tick_overrun),
 	    T(test_contact_sensor),
 	    T(test_contact_sensor_disabled),
 	    T(test_obstacle_input),
 	    T(test_link_loss_during_jog),
+	    cmocka_unit_test_setup(test_link_watchdog_stops_route, setup_watchdog),
+	    cmocka_unit_test_setup(test_link_watchdog_idle_and_paused, setup_watchdog),
 	    T(test_command_flood),
 	    T(test_joystick_lost),
 	};

@@ -25,6 +25,9 @@ static int setup(void **state)
 	(void)state;
 	fake_hal_init(&F, 1000);
 	vs_config_defaults(&C);
+	/* Time passes in lockstep waits with no request; the link watchdog
+	 * has its own tests. */
+	C.link_timeout_ms = 0;
 	vs_hal_t h = fake_hal_bind(&F);
 	const char *bad = NULL;
 	memset(&V, 0x5A, sizeof V);
@@ -1109,8 +1112,8 @@ static void test_battery_thresholds(void **state)
 }
 
 /* setPower(true) may wait up to 50 ms for the relay (hal.h) between two
- * ticks: the next tick is not an overrun, a late one after it still is. */
-static void test_overrun_not_after_relay_wait(void **state)
+ * ticks: the next tick is not late, a stall after it still is. */
+static void test_stall_not_after_relay_wait(void **state)
 {
 	(void)state;
 	fake_run(&F, &V, 3);
@@ -1119,35 +1122,54 @@ static void test_overrun_not_after_relay_wait(void **state)
 	vehicle_tick(&V, F.now_us);
 	vs_diag_t d;
 	vehicle_diag(&V, &d);
-	assert_int_equal(d.overruns, 0);
+	assert_int_equal(d.late_ticks, 0);
 	assert_int_equal(alarm_count(), 0);
 	F.now_us += 1000;
 	vehicle_tick(&V, F.now_us);
-	F.now_us += 1501;
+	F.now_us += 21001;
 	vehicle_tick(&V, F.now_us);
 	vehicle_diag(&V, &d);
-	assert_int_equal(d.overruns, 1);
-	expect_fault(209, "control tick overrun");
+	assert_int_equal(d.late_ticks, 1);
+	assert_int_equal(d.max_late_us, 20001);
+	expect_fault(210, "control loop stalled 20 ms");
 }
 
-static void test_overrun(void **state)
+/* Lateness is counted; only a stall over loop_late_ms (20 ms) is a fault. */
+static void test_late_ticks(void **state)
 {
 	(void)state;
 	power_up();
 	vs_diag_t d;
-	/* 1.5 periods late is still on time. */
+	/* 1.5 periods after the previous tick is on time. */
 	F.now_us += 1500;
 	vehicle_tick(&V, F.now_us);
 	vehicle_diag(&V, &d);
-	assert_int_equal(d.overruns, 0);
-	assert_int_equal(alarm_count(), 0);
+	assert_int_equal(d.late_ticks, 0);
+	assert_int_equal(d.max_late_us, 0);
 	F.now_us += 1501;
 	vehicle_tick(&V, F.now_us);
 	vehicle_diag(&V, &d);
-	assert_int_equal(d.overruns, 1);
-	expect_fault(209, "control tick overrun");
+	assert_int_equal(d.late_ticks, 1);
+	assert_int_equal(d.max_late_us, 501);
+	assert_int_equal(d.overruns, 0);
+	assert_int_equal(alarm_count(), 0);
+	/* Exactly loop_late_ms late: counted, the unit stays on. */
+	F.now_us += 21000;
+	vehicle_tick(&V, F.now_us);
+	vehicle_diag(&V, &d);
+	assert_int_equal(d.late_ticks, 2);
+	assert_int_equal(d.max_late_us, 20000);
+	assert_int_equal(alarm_count(), 0);
+	expect_state(VS_STATE_READY, "Ready");
+	/* One microsecond more is a stall. */
+	F.now_us += 21001;
+	vehicle_tick(&V, F.now_us);
+	vehicle_diag(&V, &d);
+	assert_int_equal(d.late_ticks, 3);
+	assert_int_equal(d.max_late_us, 20001);
+	expect_fault(210, "control loop stalled 20 ms");
 	expect_servo_off();
-	/* The clock wraps without a false overrun. */
+	/* The clock wraps without a false late tick. */
 	assert_true(vs_clearAlarm(&V));
 	F.now_us = UINT32_MAX - 400;
 	vehicle_tick(&V, F.now_us); /* a jump backwards is not late */
@@ -1155,7 +1177,7 @@ static void test_overrun(void **state)
 	vehicle_tick(&V, F.now_us);
 	fake_run(&F, &V, 3);
 	vehicle_diag(&V, &d);
-	assert_int_equal(d.overruns, 1);
+	assert_int_equal(d.late_ticks, 3);
 	assert_int_equal(alarm_count(), 0);
 	/* Late across the wrap. */
 	F.now_us = UINT32_MAX - 100;
@@ -1163,7 +1185,28 @@ static void test_overrun(void **state)
 	F.now_us += 5000;
 	vehicle_tick(&V, F.now_us);
 	vehicle_diag(&V, &d);
-	assert_int_equal(d.overruns, 2);
+	assert_int_equal(d.late_ticks, 4);
+	assert_int_equal(d.max_late_us, 20001);
+	assert_int_equal(alarm_count(), 0);
+}
+
+/* The loop's own work over a period is the overrun fault, however on time
+ * the ticks came. */
+static void test_overrun(void **state)
+{
+	(void)state;
+	power_up();
+	vs_diag_t d;
+	vehicle_tick_busy(&V, 1000);
+	vehicle_diag(&V, &d);
+	assert_int_equal(d.overruns, 0);
+	assert_int_equal(alarm_count(), 0);
+	vehicle_tick_busy(&V, 1001);
+	vehicle_diag(&V, &d);
+	assert_int_equal(d.overruns, 1);
+	assert_int_equal(d.late_ticks, 0);
+	expect_fault(209, "control tick overrun");
+	expect_servo_off();
 }
 
 static void test_caution_input(void **state)
@@ -1235,7 +1278,8 @@ int main(void)
 	    T(test_encoder_stuck),
 	    T(test_battery_thresholds),
 	    T(test_overrun),
-	    T(test_overrun_not_after_relay_wait),
+	    T(test_stall_not_after_relay_wait),
+	    T(test_late_ticks),
 	    T(test_caution_input),
 	    T(test_warnings_do_not_block),
 	};

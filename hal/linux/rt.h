@@ -22,11 +22,13 @@ typedef struct {
  * the missing privilege otherwise. prio 0: stay SCHED_OTHER. */
 void rt_setup(int prio, rt_status_t *st);
 
-/* Loop timing: a wake-up later than half a period counts as an overrun. */
+/* Loop timing: a wake-up later than half a period counts as late; busy is
+ * the loop's own CPU time in one period. */
 typedef struct {
 	uint64_t ticks;
-	uint64_t overruns;
+	uint64_t late;
 	uint32_t max_late_us;
+	uint32_t busy_max_us;
 	uint64_t skipped; /* periods dropped after falling far behind */
 } rt_stats_t;
 

@@ -20,6 +20,8 @@ void rig_init(rig_t *r)
 {
 	const char *bad = NULL;
 	vs_config_defaults(&r->cfg);
+	/* Scenarios run without a host: no link watchdog. */
+	r->cfg.link_timeout_ms = 0;
 	loop_hal_init(&r->plant, r->cfg.tick_hz);
 	r->hal = (vs_hal_t){&loop_hal_ops, &r->plant};
 	if (vehicle_init(&r->v, &r->cfg, &r->hal, &bad) != 0) {
