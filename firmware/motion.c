@@ -374,10 +374,15 @@ static void backward_pass(motion_t *m)
 }
 
 /* Distance from the reference to the point where the active line ends, if
- * the head command is a cruise line being executed. */
+ * the head command is a cruise line being executed. The running piece may
+ * belong to no queued command (a stop's braking, with new commands queued
+ * behind it): only the head's own line (stage 2, next_piece) counts. */
 static bool head_line_remaining(motion_t *m, q32_t *rem)
 {
 	if (m->mode != MODE_PATH || m->seg.kind != SEG_LINE || m->q_count == 0)
+		return false;
+	const motion_cmd_t *h = q_at(m, 0);
+	if (h->kind != MCMD_CRUISE || h->stage != 2)
 		return false;
 	*rem = m->seg.len - m->seg.s;
 	return true;

@@ -67,6 +67,16 @@ fuzz: $(addprefix $(FUZZ_BUILD)/,$(FUZZ_TARGETS))
 	done
 
 # Every committed corpus input once (a regression test of past findings).
+# A long run that anyone can start (CI keeps its short fixed-seed run):
+#   make fuzz-long [FUZZ_LONG_TARGETS=fuzz_ops] [FUZZ_LONG_TIME=1800] [FUZZ_SEED=N]
+# FUZZ_SEED=0 (the default) lets libFuzzer pick a seed and print it.
+FUZZ_LONG_TIME ?= 1800
+FUZZ_LONG_TARGETS ?= fuzz_ops
+.PHONY: fuzz-long
+fuzz-long:
+	$(Q)$(MAKE) --no-print-directory fuzz FUZZ_TARGETS="$(FUZZ_LONG_TARGETS)" \
+		FUZZ_TIME=$(FUZZ_LONG_TIME)
+
 fuzz-replay: $(FUZZ_BINS)
 	$(Q)for t in $(FUZZ_ALL); do \
 		echo "  REPLAY  $$t ($$(ls tests/fuzz/corpus/$$t | wc -l) inputs)"; \

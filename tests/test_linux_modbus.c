@@ -2,7 +2,9 @@
  * two units on one bus) over a socat pty pair; the command link on a
  * second pty. Moves, a drive reporting an error, fault reset, a drive that
  * stops answering mid-move, SIGTERM; the battery voltage from a register of
- * a drive's unit and of a BMS of its own, changing, failing and returning. */
+ * a drive's unit and of a BMS of its own, changing, failing and returning.
+ * Runs in the QEMU guest on its instruction-counted clock
+ * (tests/qemu/fw_process.sh): its timing checks then hold on a busy host. */
 #include <errno.h>
 #include <fcntl.h>
 #include <poll.h>
@@ -178,8 +180,8 @@ static void start_fw(void)
 	char text[2048], exe[700];
 	/* timeout x (retries + 1) = 30 ms, inside the drive timeout. That is
 	 * 250 ms, not the product's 50: socat, the simulator and the bus thread
-	 * are normal processes, which a busy test host delays by tens of ms.
-	 * The tick runs at SCHED_FIFO where permitted, as on the vehicle. */
+	 * share the guest's one CPU with the loop. The tick runs at SCHED_FIFO
+	 * where permitted, as on the vehicle. */
 	snprintf(
 	    text, sizeof(text),
 	    "<vehicle kinematics=\"differential\" tick_hz=\"100\">\n"

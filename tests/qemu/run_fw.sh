@@ -31,9 +31,42 @@ done
 # delay the tick; what delays it inside the guest (a call that blocks the
 # tick) still raises 209 and fails the test. A busy host only makes a run
 # take longer: hence the 240 s limit.
+# fw_process.sh runs the host-side test programs of vehicle-fw in the guest:
+# they, their peers (socat, mbdrive-sim, /usr/bin/python3 with pymodbus) and
+# the files they read go under /g as in the tree. Its cmocka results count
+# test by test; every other script counts as one test.
+process_files() {
+	local f py=/usr/bin/python3
+	for f in tests/test_linux_fw tests/test_linux_modbus vehicle-fw mbdrive-sim; do
+		[ -x "$build/$f" ] || { echo "qemu-fw: $build/$f missing: run make first" >&2; return 1; }
+		echo "$build/$f=/g/build/$f"
+	done
+	echo "$(command -v socat)=/usr/bin/socat"
+	echo "$top/hal/linux/sim/mb_crosscheck.py=/g/hal/linux/sim/mb_crosscheck.py"
+	echo "$(readlink -f $py)=/usr/bin/python3"
+	"$py" "$top/hal/linux/sim/mb_crosscheck.py" --list-modules | while IFS= read -r f; do
+		case $f in "$top"/*) continue ;; esac
+		echo "$f=$f"
+	done
+}
 passed=0; failed=0
 for t in "$here"/fw_*.sh; do
 	echo "=== $(basename "$t")"
+	if [ "$(basename "$t")" = fw_process.sh ]; then
+		if ! mapfile -t extra < <(process_files) || [ ${#extra[@]} -lt 8 ]; then
+			echo "qemu-fw: cannot collect the files for fw_process.sh"
+			failed=$((failed + 1))
+			continue
+		fi
+		out=$("$top/tools/qemu/run-guest.sh" -i -t 400 "$t" "${extra[@]}" 2>&1)
+		rc=$?
+		printf '%s\n' "$out"
+		p=$(printf '%s\n' "$out" | sed -n 's/^\[  PASSED  \] \([0-9]*\) test.*/\1/p' | awk '{s+=$1} END {print s+0}')
+		f=$(printf '%s\n' "$out" | sed -n 's/^\[  FAILED  \] \([0-9]*\) test.*/\1/p' | awk '{s+=$1} END {print s+0}')
+		passed=$((passed + p)); failed=$((failed + f))
+		[ $rc -ne 0 ] && [ "$f" -eq 0 ] && failed=$((failed + 1))
+		continue
+	fi
 	"$top/tools/qemu/run-guest.sh" -i -t 240 "$t" "$build/vehicle-fw" "$build/ujoy" \
 		"$build/cia402-sim" 2>&1
 	if [ $? -eq 0 ]; then passed=$((passed + 1)); else failed=$((failed + 1)); fi
