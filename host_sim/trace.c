@@ -55,6 +55,11 @@ void trace_tick(trace_t *t, double time_s, vehicle_t *v, const plant_t *pl)
 	for (int a = 0; a < VS_MAX_AXES; a++)
 		fprintf(t->f, ",%.2f", a < pl->n ? pl->w[a].vel_cps : 0.0);
 	fprintf(t->f, ",%d,%u\n", state, (unsigned)d.queue_len);
+	/* A reader that follows the file while the simulator runs (a test
+	 * waiting for a stop without asking the unit) sees each change. */
+	if (state != t->last_state)
+		fflush(t->f);
+	t->last_state = state;
 }
 
 int trace_close(trace_t *t)

@@ -27,6 +27,7 @@ typedef struct {
 	bool own;	/* opened by trace_open, closed by trace_close */
 	uint32_t every; /* write every Nth call of trace_tick */
 	uint32_t count;
+	int16_t last_state; /* a change of state is flushed at once */
 } trace_t;
 
 /* Opens path for writing and writes the header. Returns 0 or -1 (errno). */

@@ -525,7 +525,7 @@ static void test_client_timeout(void **state)
 static pid_t SIM_PID;
 static char PTY_PATH[256];
 
-static void start_sim(void)
+static void start_sim_traced(const char *trace)
 {
 	int p[2];
 	char exe[600];
@@ -538,8 +538,12 @@ static void start_sim(void)
 	if (SIM_PID == 0) {
 		dup2(p[1], 1);
 		close(p[0]);
-		execl(exe, exe, "--pty", "--config", "config/vehicle.xml", "--io", "config/io.xml",
-		      (char *)NULL);
+		if (trace)
+			execl(exe, exe, "--pty", "--config", "config/vehicle.xml", "--io",
+			      "config/io.xml", "--trace", trace, (char *)NULL);
+		else
+			execl(exe, exe, "--pty", "--config", "config/vehicle.xml", "--io",
+			      "config/io.xml", (char *)NULL);
 		_exit(127);
 	}
 	close(p[1]);
@@ -549,6 +553,11 @@ static void start_sim(void)
 	PTY_PATH[strcspn(PTY_PATH, "\n")] = '\0';
 	assert_memory_equal(PTY_PATH, "/dev/", 5);
 	fclose(f);
+}
+
+static void start_sim(void)
+{
+	start_sim_traced(NULL);
 }
 
 static void stop_sim(void)
@@ -658,6 +667,149 @@ static void test_vehiclectl(void **state)
 	stop_sim();
 }
 
+/* A failed test leaves no simulator behind. */
+static int sim_teardown(void **state)
+{
+	(void)state;
+	if (SIM_PID > 0) {
+		kill(SIM_PID, SIGKILL);
+		waitpid(SIM_PID, NULL, 0);
+		SIM_PID = 0;
+	}
+	return 0;
+}
+
+/* The last row of a CSV trace that the simulator is writing. */
+static bool trace_last_row(const char *path, char *row, size_t cap)
+{
+	FILE *f = fopen(path, "r");
+	char line[512];
+	bool got = false;
+
+	if (!f)
+		return false;
+	while (fgets(line, sizeof(line), f))
+		if (strchr(line, '\n') && line[0] != 't') {
+			snprintf(row, cap, "%s", line);
+			got = true;
+		}
+	fclose(f);
+	return got;
+}
+
+/* Column k (0-based) of a trace row. */
+static double trace_col(const char *row, int k)
+{
+	const char *p = row;
+	for (int i = 0; i < k && p; i++) {
+		p = strchr(p, ',');
+		if (p)
+			p++;
+	}
+	return p ? atof(p) : NAN;
+}
+
+/* The host process (binary frames through the client library) dies
+ * mid-route; vehicle-sim --pty in real time, link_timeout_ms 1000 from
+ * config/vehicle.xml. The test then waits without a request, watching the
+ * simulator's trace, so that only the dead host's silence counts. The unit
+ * stops within timeout x v + v^2 / (2 a_max) + 2 ticks of travel from the
+ * pose of the last request, with warning 153 and the queue discarded, and
+ * a new command afterwards runs. The bound is in the simulator's own time,
+ * which a busy host slows but never makes irregular. */
+static void test_link_watchdog_host_killed(void **state)
+{
+	char trace[64], row[512];
+	int p[2];
+	double x0 = 0;
+
+	(void)state;
+	snprintf(trace, sizeof(trace), "/tmp/vswd-%d.csv", (int)getpid());
+	start_sim_traced(trace);
+	assert_int_equal(pipe(p), 0);
+	pid_t host = fork();
+	assert_true(host >= 0);
+	if (host == 0) {
+		vc_client_t h;
+		bool r = false;
+		vs_position_t pos = {0, 0, 0};
+		close(p[0]);
+		if (vc_open_serial(&h, PTY_PATH, 115200) != VC_OK || vc_setPower(&h, &r, true) ||
+		    vc_setServo(&h, &r, true) || vc_moveForward(&h, &r, 5000.0) || !r ||
+		    vc_moveLinearAbs(&h, &r, (vs_position_t){0, 0, 0}) || !r)
+			_exit(1);
+		/* A status stream while the route runs: getPosition every 100 ms
+		 * for 2 s (at cruise speed from 1 s on). */
+		for (int i = 0; i < 20; i++) {
+			usleep(100000);
+			if (vc_getPosition(&h, &r, &pos))
+				_exit(2);
+		}
+		/* The pose the unit had at the last request it will hear. */
+		if (write(p[1], &pos.x, sizeof pos.x) != (ssize_t)sizeof pos.x)
+			_exit(3);
+		pause(); /* killed here, mid-route */
+		_exit(4);
+	}
+	close(p[1]);
+	assert_int_equal(read(p[0], &x0, sizeof x0), (ssize_t)sizeof x0);
+	close(p[0]);
+	assert_int_equal(kill(host, SIGKILL), 0);
+	waitpid(host, NULL, 0);
+	assert_true(x0 > 500.0 && x0 < 1500.0);
+
+	/* Wait, silent, until the trace shows the unit no longer Busy. */
+	int tries = 0;
+	do {
+		usleep(50000);
+	} while ((!trace_last_row(trace, row, sizeof row) || trace_col(row, 21) == 17) &&
+		 ++tries < 600);
+	assert_true(trace_col(row, 21) != 17);
+	/* then at rest: the drives stop and the motors' lag settles */
+	usleep(500000);
+
+	vc_client_t c;
+	bool r = false;
+	vs_position_t pos;
+	int16_t st = 0, na = 0;
+	uint16_t len = 0;
+	char msg[VS_STATE_MSG_MAX];
+	vs_alarm_t al[4];
+	assert_int_equal(vc_open_serial(&c, PTY_PATH, 115200), VC_OK);
+	assert_int_equal(vc_getState(&c, &r, &st, msg), VC_OK);
+	assert_int_equal(st, VS_STATE_WARNING);
+	assert_string_equal(msg, "Warning-153");
+	assert_int_equal(vc_getActiveAlarm(&c, &r, 4, &na, al, &len), VC_OK);
+	assert_int_equal(na, 1);
+	assert_int_equal(al[0].code, 153);
+	assert_string_equal(al[0].source, "link lost: frames silent 1000 ms");
+	assert_int_equal(vc_getPosition(&c, &r, &pos), VC_OK);
+	/* 500 mm/s, 1000 mm/s^2 limit, 1 kHz */
+	double bound = 1.0 * 500.0 + 500.0 * 500.0 / (2.0 * 1000.0) + 2.0 * 0.5;
+	assert_true(pos.x - x0 <= bound);
+	assert_true(pos.x - x0 > bound - 3.0);
+	/* the queued moveLinearAbs 0 0 0 is gone: the unit stays */
+	usleep(300000);
+	vs_position_t pos2;
+	assert_int_equal(vc_getPosition(&c, &r, &pos2), VC_OK);
+	assert_true(fabs(pos2.x - pos.x) < 0.05);
+	/* a new command runs normally */
+	assert_int_equal(vc_moveForward(&c, &r, 100.0), VC_OK);
+	assert_true(r);
+	tries = 0;
+	do {
+		usleep(100000);
+		assert_int_equal(vc_getState(&c, &r, &st, msg), VC_OK);
+	} while (st == VS_STATE_BUSY && ++tries < 100);
+	assert_int_equal(vc_getPosition(&c, &r, &pos2), VC_OK);
+	/* the default plant's 20 ms motor lag still shows at Ready */
+	assert_true(fabs(pos2.x - pos.x - 100.0) < 1.0);
+	vc_close(&c);
+	stop_sim();
+	SIM_PID = 0;
+	unlink(trace);
+}
+
 int main(int argc, char **argv)
 {
 	const struct CMUnitTest tests[] = {
@@ -668,6 +820,7 @@ int main(int argc, char **argv)
 	    cmocka_unit_test_setup_teardown(test_bad_input, setup, teardown),
 	    cmocka_unit_test(test_client_timeout),
 	    cmocka_unit_test(test_vehiclectl),
+	    cmocka_unit_test_teardown(test_link_watchdog_host_killed, sim_teardown),
 	};
 
 	if (argc > 0) {
