@@ -148,7 +148,8 @@ static bool cmd_wait(sim_t *s, int argc, char **argv, char *reply, size_t cap)
 {
 	unsigned long ms;
 	if (s->realtime)
-		return ERR("$wait runs simulated time only with --fast; in real time the host waits");
+		return ERR(
+		    "$wait runs simulated time only with --fast; in real time the host waits");
 	if (argc != 2 || !parse_uint(argv[1], SIM_WAIT_MAX_MS, &ms))
 		return ERR("usage: $wait MS (0..%u)", SIM_WAIT_MAX_MS);
 	sim_run_ms(s, (uint32_t)ms);

@@ -74,8 +74,8 @@ static bool ts_before(const struct timespec *a, const struct timespec *b)
 	return a->tv_sec < b->tv_sec || (a->tv_sec == b->tv_sec && a->tv_nsec < b->tv_nsec);
 }
 
-/* Feeds complete lines from the input buffer. At EOF a last line without an ending is completed. A buffer full of
- * one over-long line goes to the console whole; it discards it. */
+/* Feeds complete lines from the input buffer. At EOF a last line without an ending is completed. A
+ * buffer full of one over-long line goes to the console whole; it discards it. */
 static void feed_lines(app_t *a)
 {
 	while (a->in_len > 0 && !stop_requested) {

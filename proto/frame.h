@@ -3,9 +3,9 @@
  *   A5 | len lo | len hi | seq | op | payload[len] | crc lo | crc hi
  *
  * sync 0xA5 (a sync byte inside a console line of text belongs to that
- * line: see frame_rx_set_hold and docs/protocol.md); len = payload bytes, u16 LE; seq chosen by the host, echoed in the
- * answer; op = opcode (1..0x7F) in a request, opcode | 0x80 in a response.
- * crc: CRC-16/CCITT-FALSE (cmd_crc16 from 0xFFFF) over len..payload, LE.
+ * line: see frame_rx_set_hold and docs/protocol.md); len = payload bytes, u16 LE; seq chosen by the
+ * host, echoed in the answer; op = opcode (1..0x7F) in a request, opcode | 0x80 in a response. crc:
+ * CRC-16/CCITT-FALSE (cmd_crc16 from 0xFFFF) over len..payload, LE.
  *
  * A response payload starts with a status byte (wire_status_t): 0 then the
  * wire response (result byte + outs), or a NAK reason alone. A NAK for a
@@ -51,10 +51,10 @@ size_t frame_encode_response(uint8_t *out, size_t cap, uint8_t seq, uint8_t opco
 
 /* One received frame, or a failed candidate. */
 typedef struct {
-	int status;  /* WIRE_ST_OK, or CRC / OVERSIZE / TRUNCATED */
-	bool header; /* seq and op were received (maybe damaged if status != OK) */
+	int status;	 /* WIRE_ST_OK, or CRC / OVERSIZE / TRUNCATED */
+	bool header;	 /* seq and op were received (maybe damaged if status != OK) */
 	uint8_t seq, op; /* seq 0 / op 0 when the candidate ended before them */
-	uint16_t crc; /* the frame's check value (identity of a request) */
+	uint16_t crc;	 /* the frame's check value (identity of a request) */
 	const uint8_t *payload;
 	size_t len;
 } frame_t;

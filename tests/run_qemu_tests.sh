@@ -77,6 +77,7 @@ run() {
 t0=$(date +%s)
 run can_link.sh "${common[@]}"
 run can_peers.sh "${common[@]}" "$here/qemu/can_python.py" "${pyfiles[@]}"
+run can_isotp.sh "${common[@]}"
 echo "qemu: guests took $(($(date +%s) - t0)) s"
 [ -n "$failed_names" ] && echo "qemu: FAILED:$failed_names"
 summary "$passed" "$failed"
