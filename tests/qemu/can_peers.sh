@@ -103,4 +103,10 @@ start_sim --node 1 --status-hz 10
 PYTHONDONTWRITEBYTECODE=1 timeout 60 python3 /test/can_python.py || fail "can_python.py failed"
 stop_sim
 pass "python-can peer"
+
+# the vehicleservice package over CAN, against vehiclectl
+start_sim --node 1 --status-hz 10
+PYTHONDONTWRITEBYTECODE=1 timeout 60 python3 /test/can_vs.py || fail "can_vs.py failed"
+stop_sim
+pass "vehicleservice (Python client) over CAN"
 echo "$T: all passed"
