@@ -108,7 +108,8 @@ run: $(BUILD)/vehicle-sim
 
 # Suites that boot a Debian kernel under QEMU (real SocketCAN, GPIO, uinput);
 # QEMU=0 leaves them out for a quick local run.
-CHECK_SUITES := $(if $(filter 0,$(QEMU)),,tests/run_qemu_tests.sh tests/qemu/run_fw.sh)
+CHECK_SUITES := tests/run_python_tests.sh \
+	$(if $(filter 0,$(QEMU)),,tests/run_qemu_tests.sh tests/qemu/run_fw.sh)
 
 # Test programs that start vehicle-fw and its peers run in the QEMU guest on
 # an instruction-counted clock (tests/qemu/fw_process.sh), not on the host.

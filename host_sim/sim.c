@@ -69,10 +69,9 @@ void sim_set_tick_cb(sim_t *s, sim_tick_fn fn, void *ctx)
 	s->tick_ctx = ctx;
 }
 
-void sim_set_wait_fn(sim_t *s, sim_wait_fn fn, void *ctx)
+void sim_set_realtime(sim_t *s, bool on)
 {
-	s->on_wait = fn;
-	s->wait_ctx = ctx;
+	s->realtime = on;
 }
 
 void sim_set_output(sim_t *s, console_write_fn fn, void *ctx)
@@ -148,12 +147,12 @@ static int parse_onoff(const char *s)
 static bool cmd_wait(sim_t *s, int argc, char **argv, char *reply, size_t cap)
 {
 	unsigned long ms;
+	if (s->realtime)
+		return ERR(
+		    "$wait runs simulated time only with --fast; in real time the host waits");
 	if (argc != 2 || !parse_uint(argv[1], SIM_WAIT_MAX_MS, &ms))
 		return ERR("usage: $wait MS (0..%u)", SIM_WAIT_MAX_MS);
-	if (s->on_wait)
-		s->on_wait(s->wait_ctx, (uint32_t)ms);
-	else
-		sim_run_ms(s, (uint32_t)ms);
+	sim_run_ms(s, (uint32_t)ms);
 	return reply_f(reply, cap, "ok wait %lu", ms);
 }
 

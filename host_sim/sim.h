@@ -37,8 +37,6 @@
 
 typedef struct sim sim_t;
 typedef void (*sim_tick_fn)(void *ctx, sim_t *s);
-/* Replaces the lockstep run of '$wait' (vehicle-sim in real time). */
-typedef void (*sim_wait_fn)(void *ctx, uint32_t ms);
 
 struct sim {
 	vs_config_t cfg;
@@ -50,8 +48,9 @@ struct sim {
 	uint64_t now_us; /* simulated time; the firmware sees it modulo 2^32 */
 	sim_tick_fn on_tick;
 	void *tick_ctx;
-	sim_wait_fn on_wait;
-	void *wait_ctx;
+	/* vehicle-sim in real time: time runs by itself and '$wait' is refused
+	 * (answering it early, then holding the port, would stall the link). */
+	bool realtime;
 	trace_t *trace;
 };
 
@@ -70,7 +69,7 @@ void sim_tick(sim_t *s);
 void sim_run_ms(sim_t *s, uint32_t ms);
 
 void sim_set_tick_cb(sim_t *s, sim_tick_fn fn, void *ctx);
-void sim_set_wait_fn(sim_t *s, sim_wait_fn fn, void *ctx);
+void sim_set_realtime(sim_t *s, bool on);
 /* Where console_feed replies go (vehicle-sim: stdout). */
 void sim_set_output(sim_t *s, console_write_fn fn, void *ctx);
 /* Trace every tick into t (NULL: none); the caller owns t. */

@@ -75,6 +75,7 @@ void sim_can_close(sim_can_t *sc)
 		"vehicle-sim: CAN counters: rx %lu foreign %lu bad_dlc %lu bad_pci %lu "
 		"sequence %lu discarded %lu aborted %lu timeouts %lu oversize %lu short %lu "
 		"requests %lu replays %lu naks %lu tx %lu tx_busy %lu tx_abandoned %lu "
+		"flow_rx %lu flow_tx %lu fc_timeouts %lu overflow %lu "
 		"status_sent %lu status_dropped %lu sock_tx_full %lu sock_rx_dropped %lu "
 		"sock_rx_overflow %lu\n",
 		(unsigned long)t->rx_frames, (unsigned long)t->rx_foreign,
@@ -84,7 +85,9 @@ void sim_can_close(sim_can_t *sc)
 		(unsigned long)t->rx_oversize, (unsigned long)t->rx_short,
 		(unsigned long)t->requests, (unsigned long)t->replays, (unsigned long)t->naks,
 		(unsigned long)t->tx_frames, (unsigned long)t->tx_busy,
-		(unsigned long)t->tx_abandoned, (unsigned long)t->status_sent,
+		(unsigned long)t->tx_abandoned, (unsigned long)t->rx_flow,
+		(unsigned long)t->fc_sent, (unsigned long)t->tx_fc_timeouts,
+		(unsigned long)t->tx_overflow, (unsigned long)t->status_sent,
 		(unsigned long)t->status_dropped, (unsigned long)sc->sock.tx_full,
 		(unsigned long)sc->sock.rx_dropped, (unsigned long)sc->sock.rx_overflow);
 	sockcan_close(&sc->sock);

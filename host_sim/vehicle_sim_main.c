@@ -2,11 +2,11 @@
  * on stdin/stdout.
  *
  * --realtime ticks at the configured rate against CLOCK_MONOTONIC absolute
- * deadlines and polls stdin between ticks; '$wait MS' holds further input
- * for MS ms of wall time while the unit keeps running. --fast runs lockstep:
- * simulated time advances only inside '$wait', so a script replays the same
- * way every time. Input is fed to the console one line at a time so that a
- * held line is never read early. Every reply is flushed at once.
+ * deadlines and polls stdin between ticks; '$wait' is refused there (the host
+ * waits itself: the link is never held). --fast runs lockstep: simulated
+ * time advances only inside '$wait', so a script replays the same way every
+ * time. Input is fed to the console one line at a time. Every reply is
+ * flushed at once.
  */
 #include <errno.h>
 #include <fcntl.h>
@@ -42,9 +42,6 @@ typedef struct {
 	size_t in_len;
 	bool eof;
 	bool write_failed;
-	/* realtime: input held until this monotonic time */
-	bool hold;
-	struct timespec hold_until;
 	/* --can: the CAN link, served every tick; the simulator then runs
 	 * until a signal even after stdin ends. */
 	sim_can_t can;
@@ -77,20 +74,11 @@ static bool ts_before(const struct timespec *a, const struct timespec *b)
 	return a->tv_sec < b->tv_sec || (a->tv_sec == b->tv_sec && a->tv_nsec < b->tv_nsec);
 }
 
-static void realtime_wait(void *ctx, uint32_t ms)
-{
-	app_t *a = ctx;
-	clock_gettime(CLOCK_MONOTONIC, &a->hold_until);
-	ts_add_ns(&a->hold_until, (long long)ms * 1000000LL);
-	a->hold = true;
-}
-
-/* Feeds complete lines from the input buffer, stopping when a '$wait' holds
- * input. At EOF a last line without an ending is completed. A buffer full of
- * one over-long line goes to the console whole; it discards it. */
+/* Feeds complete lines from the input buffer. At EOF a last line without an ending is completed. A
+ * buffer full of one over-long line goes to the console whole; it discards it. */
 static void feed_lines(app_t *a)
 {
-	while (a->in_len > 0 && !a->hold && !stop_requested) {
+	while (a->in_len > 0 && !stop_requested) {
 		size_t n = 0;
 		while (n < a->in_len && a->in[n] != '\n' && a->in[n] != '\r')
 			n++;
@@ -189,19 +177,14 @@ static int run_realtime(app_t *a)
 	clock_gettime(CLOCK_MONOTONIC, &next);
 
 	while (!stop_requested && !a->write_failed) {
-		clock_gettime(CLOCK_MONOTONIC, &now);
-		if (a->hold && !ts_before(&now, &a->hold_until))
-			a->hold = false;
 		if (a->pty_on) {
-			/* '$wait' holds the port's further input, as it holds stdin. */
-			if (!a->hold)
-				link_poll(&a->link, (uint32_t)(a->sim.now_us / 1000u));
-		} else if (!a->hold) {
+			link_poll(&a->link, (uint32_t)(a->sim.now_us / 1000u));
+		} else {
 			struct pollfd pfd = {.fd = STDIN_FILENO, .events = POLLIN};
 			if (!a->eof && poll(&pfd, 1, 0) > 0 && !read_input(a))
 				return 1;
 			feed_lines(a);
-			if (a->eof && a->in_len == 0 && !a->hold && !a->can_on)
+			if (a->eof && a->in_len == 0 && !a->can_on)
 				break;
 		}
 		sim_tick(&a->sim);
@@ -229,7 +212,7 @@ static void usage(FILE *f)
 	fputs("usage: vehicle-sim [options]\n"
 	      "  --config FILE   vehicle description (default config/vehicle.xml)\n"
 	      "  --io FILE       io.xml (default config/io.xml)\n"
-	      "  --realtime      tick at the configured rate in wall time\n"
+	      "  --realtime      tick at the configured rate in wall time ($wait refused)\n"
 	      "  --fast          lockstep: time advances only in '$wait MS'; exit at EOF\n"
 	      "                  (default: --realtime on a terminal, else --fast)\n"
 	      "  --trace FILE    CSV trace, one row per tick (columns: host_sim/trace.h)\n"
@@ -402,7 +385,7 @@ int main(int argc, char **argv)
 	}
 	sim_set_output(&a->sim, write_stdout, a);
 	if (realtime)
-		sim_set_wait_fn(&a->sim, realtime_wait, a);
+		sim_set_realtime(&a->sim, true);
 
 	if (can_iface) {
 		if (sim_can_open(&a->can, &a->sim, can_iface, (unsigned)can_node, (unsigned)can_hz,

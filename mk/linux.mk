@@ -42,11 +42,17 @@ SYSCONFDIR ?= /etc
 BINDIR := $(PREFIX)/bin
 UNITDIR ?= $(PREFIX)/lib/systemd/system
 EXAMPLEDIR := $(PREFIX)/share/vehicle/examples
+# The Python client (python/vehicleservice) where Debian's /usr/bin/python3
+# looks: dist-packages under /usr, the versioned one under other prefixes.
+PYVER := $(shell /usr/bin/python3 -c 'import sys; print("%d.%d" % sys.version_info[:2])' 2>/dev/null)
+PYTHONDIR ?= $(if $(filter /usr,$(PREFIX)),/usr/lib/python3/dist-packages,$(PREFIX)/lib/python$(PYVER)/dist-packages)
 .PHONY: install
 install: $(BUILD)/vehicle-fw $(BUILD)/vehiclectl
 	install -d $(DESTDIR)$(BINDIR) $(DESTDIR)$(UNITDIR) $(DESTDIR)$(EXAMPLEDIR) \
-		$(DESTDIR)$(SYSCONFDIR)/vehicle
+		$(DESTDIR)$(SYSCONFDIR)/vehicle $(DESTDIR)$(PYTHONDIR)/vehicleservice
 	install -m 755 $(BUILD)/vehicle-fw $(BUILD)/vehiclectl $(DESTDIR)$(BINDIR)/
+	install -m 644 python/vehicleservice/*.py $(DESTDIR)$(PYTHONDIR)/vehicleservice/
+	install -m 755 tools/vehicle-plot $(DESTDIR)$(BINDIR)/vehicle-plot
 	sed -e 's|@BINDIR@|$(BINDIR)|g' -e 's|@SYSCONFDIR@|$(SYSCONFDIR)|g' \
 		tools/systemd/vehicle-fw.service >$(DESTDIR)$(UNITDIR)/vehicle-fw.service
 	chmod 644 $(DESTDIR)$(UNITDIR)/vehicle-fw.service

@@ -20,13 +20,19 @@
  *   response = seq u8, opcode u8, status u8 (wire_status_t), and when the
  *              status is WIRE_ST_OK the response payload (result + outs)
  *
- * Segmentation (own, ISO 15765-2-like PCI byte, no flow control frames):
+ * Segmentation: ISO 15765-2 (ISO-TP), normal addressing, classic CAN:
  *   single      data[0] = 0x00 | len (1..7), data[1..len] = the message
  *   first       data[0] = 0x10 | len >> 8, data[1] = len & 0xFF (len 8..4095),
  *               data[2..7] = message bytes 0..5; DLC 8
  *   consecutive data[0] = 0x20 | index (1, 2, ... 15, 0, 1, ...),
  *               data[1..7] = the next 7 bytes; DLC 8 except the last frame
+ *   flow        data[0] = 0x30 | status (0 go on, 1 wait, 2 overflow),
+ *               data[1] = block size (0: no limit), data[2] = STmin; DLC 3
  * Bytes past the message in a single or last consecutive frame are padding.
+ * The receiver of a first frame answers with a flow control frame on its own
+ * identifier (the unit: 0x580+N, always "go on, block size 0, STmin 0"); the
+ * sender of a first frame waits for it, then sends consecutive frames in
+ * blocks of the block size, at least STmin apart.
  */
 #ifndef CANLINK_H
 #define CANLINK_H
@@ -58,6 +64,15 @@ typedef struct {
 #define CANLINK_PCI_SINGLE 0x00u
 #define CANLINK_PCI_FIRST  0x10u
 #define CANLINK_PCI_NEXT   0x20u
+#define CANLINK_PCI_FLOW   0x30u
+
+/* Flow control frames: flow status, and how long a sender waits for one
+ * (ISO 15765-2 N_Bs) before it gives the message up. */
+#define CANLINK_FC_CTS	      0u /* continue to send */
+#define CANLINK_FC_WAIT	      1u /* wait for another flow control frame */
+#define CANLINK_FC_OVFLW      2u /* too long for the receiver: give up */
+#define CANLINK_FC_DLC	      3u
+#define CANLINK_FC_TIMEOUT_US 1000000u
 
 /* Message headers. */
 #define CANLINK_REQ_HDR	 2 /* seq, opcode */
@@ -85,6 +100,8 @@ void canlink_seg_frame(const uint8_t *msg, size_t len, size_t i, uint32_t id, ca
 typedef enum {
 	CANLINK_RX_PENDING = 0,	   /* frame taken, message not complete */
 	CANLINK_RX_DONE = 1,	   /* a message is complete in buf[0..len) */
+	CANLINK_RX_FLOW = 2,	   /* a flow control frame: for the sending side,
+				      the message in progress is untouched */
 	CANLINK_RX_BAD_DLC = -1,   /* DLC too short for its PCI, or zero */
 	CANLINK_RX_BAD_PCI = -2,   /* reserved frame type, length 0 or a first
 				      frame for a message that fits a single */
@@ -112,6 +129,13 @@ int canlink_rx_feed(canlink_rx_t *r, const canlink_frame_t *f, uint32_t now_us);
  * it is then dropped (buf still holds its first bytes). */
 bool canlink_rx_expired(canlink_rx_t *r, uint32_t now_us);
 
+/* A flow control frame with identifier id. */
+void canlink_fc_frame(uint32_t id, uint8_t status, uint8_t block_size, uint8_t stmin,
+		      canlink_frame_t *f);
+/* The separation time an STmin byte asks for, in microseconds: 0x00..0x7F
+ * milliseconds, 0xF1..0xF9 100..900 us, reserved values 127 ms (ISO). */
+uint32_t canlink_stmin_us(uint8_t stmin);
+
 /* ---- the unit's side --------------------------------------------------- */
 
 /* Sends one frame; false when the transmit queue cannot take it now. */
@@ -134,12 +158,16 @@ typedef struct {
 	uint32_t rx_timeouts;
 	uint32_t rx_oversize;
 	uint32_t rx_short; /* complete message shorter than seq + opcode */
+	uint32_t rx_flow;  /* flow control frames from the host */
+	uint32_t fc_sent;  /* flow control frames the unit sent */
 	uint32_t requests; /* operations executed */
 	uint32_t replays;  /* retransmissions answered from the cache */
 	uint32_t naks;	   /* responses with a non-zero status */
 	uint32_t tx_frames;
 	uint32_t tx_busy;	 /* send refused, retried on the next poll */
 	uint32_t tx_abandoned;	 /* response not finished when the next request came */
+	uint32_t tx_fc_timeouts; /* response given up: no flow control in time */
+	uint32_t tx_overflow;	 /* response given up: the host said overflow */
 	uint32_t status_sent;	 /* status groups sent */
 	uint32_t status_dropped; /* status groups (partly) not sent: queue full */
 } canlink_stats_t;
@@ -157,6 +185,14 @@ typedef struct {
 	uint8_t nak_buf[CANLINK_RESP_HDR];
 	const uint8_t *tx_msg;
 	size_t tx_len, tx_next, tx_count, tx_len_last;
+	/* Flow control of the response: waiting for the host's frame since
+	 * tx_fc_us; its block size, frames sent in the block, STmin. */
+	bool tx_wait_fc, tx_cf_sent;
+	uint8_t tx_bs, tx_block;
+	uint32_t tx_fc_us, tx_stmin_us, tx_last_us;
+	/* The flow control answer to a request's first frame, not yet sent. */
+	bool fc_pending;
+	uint8_t fc_status;
 	/* The last executed request and its response, for retransmissions. */
 	uint8_t last_req[CANLINK_REQ_MAX];
 	size_t last_req_len;

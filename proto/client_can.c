@@ -66,6 +66,72 @@ static int next_frame(can_ctx_t *k, uint32_t t0, unsigned timeout_ms, canlink_fr
 	}
 }
 
+static int send_frame(can_ctx_t *k, const canlink_frame_t *f)
+{
+	if (k->bus.send(k->bus.ctx, f) != VC_OK)
+		return VC_E_LINK;
+	k->stats.frames_tx++;
+	k->c->stats.bytes_tx += f->dlc;
+	return VC_OK;
+}
+
+/* Waits for the unit's flow control frame after a first frame or a block:
+ * VC_OK with the block size in *bs (0: the rest at once), VC_E_NAK when the
+ * unit cannot take the message (its NAK follows), VC_E_TIMEOUT, VC_E_LINK. */
+static int await_fc(can_ctx_t *k, uint32_t t0, unsigned timeout_ms, uint8_t *bs)
+{
+	for (;;) {
+		canlink_frame_t f;
+		int r = next_frame(k, t0, timeout_ms, &f);
+		if (r != VC_OK)
+			return r;
+		if (take_status(k, &f) || f.id != CANLINK_ID_RESPONSE + k->node)
+			continue;
+		if ((f.data[0] & 0xF0u) != CANLINK_PCI_FLOW || f.dlc < CANLINK_FC_DLC) {
+			/* A late answer to an earlier request. */
+			k->stats.stale++;
+			continue;
+		}
+		switch (f.data[0] & 0x0Fu) {
+		case CANLINK_FC_CTS:
+			/* The unit always grants STmin 0, which is all this
+			 * sender does. */
+			*bs = f.data[1];
+			return VC_OK;
+		case CANLINK_FC_WAIT:
+			t0 = k->bus.now_ms(k->bus.ctx);
+			break;
+		default:
+			return VC_E_NAK;
+		}
+	}
+}
+
+/* Sends a request message under ISO 15765-2 flow control. */
+static int send_message(can_ctx_t *k, const uint8_t *msg, size_t len, unsigned timeout_ms)
+{
+	size_t n = canlink_seg_count(len);
+	uint8_t bs = 0, sent = 0;
+
+	for (size_t i = 0; i < n; i++) {
+		canlink_frame_t f;
+		int r;
+
+		canlink_seg_frame(msg, len, i, CANLINK_ID_REQUEST + k->node, &f);
+		if ((r = send_frame(k, &f)) != VC_OK)
+			return r;
+		if (n == 1 || i + 1 == n || (i > 0 && (!bs || ++sent < bs)))
+			continue;
+		sent = 0;
+		r = await_fc(k, k->bus.now_ms(k->bus.ctx), timeout_ms, &bs);
+		if (r == VC_E_NAK)
+			return VC_OK; /* the unit answers with its NAK */
+		if (r != VC_OK)
+			return r;
+	}
+	return VC_OK;
+}
+
 /* Waits for the response to (seq, opcode) until timeout_ms after t0.
  * VC_OK with the message in k->rx_buf[0..*len), VC_E_TIMEOUT, VC_E_LINK. */
 static int await_response(can_ctx_t *k, uint8_t opcode, uint32_t t0, unsigned timeout_ms,
@@ -82,6 +148,15 @@ static int await_response(can_ctx_t *k, uint8_t opcode, uint32_t t0, unsigned ti
 		if (fr < 0) {
 			k->stats.bad++;
 			continue;
+		}
+		if (fr == CANLINK_RX_PENDING && (f.data[0] & 0xF0u) == CANLINK_PCI_FIRST) {
+			/* ISO 15765-2: the rest comes after our flow control,
+			 * all at once (block size 0, STmin 0). */
+			canlink_frame_t fc;
+
+			canlink_fc_frame(CANLINK_ID_REQUEST + k->node, CANLINK_FC_CTS, 0, 0, &fc);
+			if (send_frame(k, &fc) != VC_OK)
+				return VC_E_LINK;
 		}
 		if (fr != CANLINK_RX_DONE)
 			continue;
@@ -111,7 +186,6 @@ static int can_exchange(void *ctx, unsigned opcode, const uint8_t *req, size_t r
 	if (req_len)
 		memcpy(msg + CANLINK_REQ_HDR, req, req_len);
 	size_t len = CANLINK_REQ_HDR + req_len;
-	size_t nframes = canlink_seg_count(len);
 
 	k->c->stats.requests++;
 	for (unsigned attempt = 0; attempt <= retries; attempt++) {
@@ -119,17 +193,11 @@ static int can_exchange(void *ctx, unsigned opcode, const uint8_t *req, size_t r
 			k->c->stats.retries++;
 		/* A retry repeats the same sequence number: the unit answers it
 		 * from its cache without running the operation again. */
-		for (size_t i = 0; i < nframes; i++) {
-			canlink_frame_t f;
-			canlink_seg_frame(msg, len, i, CANLINK_ID_REQUEST + k->node, &f);
-			if (k->bus.send(k->bus.ctx, &f) != VC_OK)
-				return VC_E_LINK;
-			k->stats.frames_tx++;
-			k->c->stats.bytes_tx += f.dlc;
-		}
+		int r = send_message(k, msg, len, timeout_ms);
 		size_t rlen = 0;
-		int r = await_response(k, (uint8_t)opcode, k->bus.now_ms(k->bus.ctx), timeout_ms,
-				       &rlen);
+		if (r == VC_OK)
+			r = await_response(k, (uint8_t)opcode, k->bus.now_ms(k->bus.ctx),
+					   timeout_ms, &rlen);
 		if (r == VC_E_TIMEOUT) {
 			k->c->stats.timeouts++;
 			continue;

@@ -526,8 +526,15 @@ void console_feed(console_t *c, const uint8_t *data, size_t n)
 		}
 		c->last_cr = b == '\r';
 		if (b == '\r' || b == '\n') {
+			c->in_line = c->text = false;
 			end_line(c);
 			continue;
+		}
+		{
+			bool ascii = (b >= 0x20 && b < 0x7F) || b == '\t';
+
+			c->text = c->in_line ? c->text && (ascii || b >= 0x80) : ascii;
+			c->in_line = true;
 		}
 		if (c->overflow)
 			continue;

@@ -46,6 +46,8 @@ typedef struct {
 	size_t len;
 	bool overflow; /* discarding the rest of an over-long line */
 	bool last_cr;  /* swallow the LF of a CRLF */
+	bool in_line;  /* bytes of a line received since the last line ending */
+	bool text;     /* ... and they are a line of text (console_in_text) */
 	uint32_t lines, errors;
 } console_t;
 
@@ -53,6 +55,16 @@ void console_init(console_t *c, vehicle_t *v, console_write_fn write, void *wctx
 void console_set_extra(console_t *c, console_extra_fn fn, void *ctx);
 /* Feed received bytes; replies are written as whole lines ending in "\n". */
 void console_feed(console_t *c, const uint8_t *data, size_t n);
+/* True while a line of text is in progress: its first byte was printable
+ * ASCII (0x20..0x7E) or a tab, and every byte since has been printable
+ * ASCII, a tab or 0x80..0xFF (UTF-8), up to its line ending. The serial
+ * link gives a sync byte to such a line instead of starting a frame, so a
+ * UTF-8 comment ("# \xC2\xA5 yen") stays a comment. A control byte ends
+ * the state until the line ending (the line is answered error 7). */
+static inline bool console_in_text(const console_t *c)
+{
+	return c->text;
+}
 /* Run one line (no line ending). Returns false when the line gets no reply
  * (empty or comment); otherwise reply holds the line without "\n". */
 bool console_exec(console_t *c, const char *line, char *reply, size_t cap);

@@ -58,12 +58,28 @@ static void report_bad(frame_rx_t *rx, const uint8_t *c, size_t avail, int statu
 
 	memset(&f, 0, sizeof(f));
 	f.status = status;
+	/* The seq byte is echoed as soon as it was received, the op only
+	 * reported (it is never trusted in a NAK). */
+	if (avail >= 4)
+		f.seq = c[3];
 	if (avail >= FRAME_HDR) {
 		f.header = true;
-		f.seq = c[3];
 		f.op = c[4];
 	}
 	rx->on_frame(rx->ctx, &f);
+}
+
+/* A sync byte inside a console line of text belongs to that line. */
+static bool held(const frame_rx_t *rx)
+{
+	return rx->hold && rx->hold(rx->hold_ctx);
+}
+
+static void other(frame_rx_t *rx, const uint8_t *data, size_t n)
+{
+	rx->st.other_bytes += (uint32_t)n;
+	if (rx->on_other)
+		rx->on_other(rx->ctx, data, n);
 }
 
 /* Works through buf from the front: bytes before a sync go out as other
@@ -78,26 +94,25 @@ static void scan(frame_rx_t *rx, bool flush)
 		const uint8_t *c = rx->buf + start;
 		size_t avail = rx->n - start, len, need;
 
-		if (c[0] != FRAME_SYNC) {
-			const uint8_t *s = memchr(c, FRAME_SYNC, avail);
-			size_t k = s ? (size_t)(s - c) : avail;
+		if (c[0] != FRAME_SYNC || held(rx)) {
+			const uint8_t *s = c[0] == FRAME_SYNC ? NULL : memchr(c, FRAME_SYNC, avail);
+			size_t k = c[0] == FRAME_SYNC ? 1 : s ? (size_t)(s - c) : avail;
 
-			rx->st.other_bytes += (uint32_t)k;
-			if (rx->on_other)
-				rx->on_other(rx->ctx, c, k);
+			other(rx, c, k);
 			start += k;
 			continue;
 		}
 		if (avail >= 3) {
 			len = wire_get_u16(c + 1);
-			if (len > rx->max_payload) {
+			/* Refused at once, but only once its seq is in to echo. */
+			if (len > rx->max_payload && avail >= 4) {
 				rx->st.oversize++;
 				report_bad(rx, c, avail, WIRE_ST_OVERSIZE);
 				start++;
 				continue;
 			}
 			need = FRAME_OVERHEAD + len;
-			if (avail >= need) {
+			if (len <= rx->max_payload && avail >= need) {
 				uint16_t crc = cmd_crc16(0xFFFF, c + 1, FRAME_HDR - 1 + len);
 
 				if (crc != wire_get_u16(c + FRAME_HDR + len)) {
@@ -129,6 +144,12 @@ static void scan(frame_rx_t *rx, bool flush)
 	}
 }
 
+void frame_rx_set_hold(frame_rx_t *rx, frame_hold_fn hold, void *ctx)
+{
+	rx->hold = hold;
+	rx->hold_ctx = ctx;
+}
+
 void frame_rx_feed(frame_rx_t *rx, const uint8_t *data, size_t n, uint32_t now_ms)
 {
 	size_t i = 0;
@@ -141,10 +162,13 @@ void frame_rx_feed(frame_rx_t *rx, const uint8_t *data, size_t n, uint32_t now_m
 			const uint8_t *s = memchr(data + i, FRAME_SYNC, n - i);
 			size_t k = s ? (size_t)(s - (data + i)) : n - i;
 
-			rx->st.other_bytes += (uint32_t)k;
-			if (rx->on_other)
-				rx->on_other(rx->ctx, data + i, k);
+			other(rx, data + i, k);
 			i += k;
+			continue;
+		}
+		if (rx->n == 0 && held(rx)) {
+			other(rx, data + i, 1);
+			i++;
 			continue;
 		}
 		/* Never full here: every candidate is complete or rejected by
@@ -186,8 +210,9 @@ static void srv_frame(void *ctx, const frame_t *f)
 	int st = WIRE_ST_OK;
 
 	if (f->status != WIRE_ST_OK) {
-		/* The opcode of a damaged frame cannot be trusted: answer with 0. */
-		srv_nak(s, f->header ? f->seq : 0, 0, f->status);
+		/* The opcode of a damaged frame cannot be trusted: answer with 0.
+		 * The seq is the one received, 0 when the frame ended before it. */
+		srv_nak(s, f->seq, 0, f->status);
 		return;
 	}
 	if (f->op & FRAME_RESP_FLAG) {

@@ -2,15 +2,16 @@
  *
  *   A5 | len lo | len hi | seq | op | payload[len] | crc lo | crc hi
  *
- * sync 0xA5 (never the first byte of a console line, which is printable
- * ASCII); len = payload bytes, u16 LE; seq chosen by the host, echoed in the
- * answer; op = opcode (1..0x7F) in a request, opcode | 0x80 in a response.
- * crc: CRC-16/CCITT-FALSE (cmd_crc16 from 0xFFFF) over len..payload, LE.
+ * sync 0xA5 (a sync byte inside a console line of text belongs to that
+ * line: see frame_rx_set_hold and docs/protocol.md); len = payload bytes, u16 LE; seq chosen by the
+ * host, echoed in the answer; op = opcode (1..0x7F) in a request, opcode | 0x80 in a response. crc:
+ * CRC-16/CCITT-FALSE (cmd_crc16 from 0xFFFF) over len..payload, LE.
  *
  * A response payload starts with a status byte (wire_status_t): 0 then the
  * wire response (result byte + outs), or a NAK reason alone. A NAK for a
- * frame whose opcode could not be trusted (bad check, oversize) carries
- * op 0x80.
+ * frame whose opcode could not be trusted (bad check, oversize, truncated)
+ * carries op 0x80 and the seq byte received (0 when the frame ended before
+ * it). An oversize length is refused when the seq byte is in.
  *
  * The receiver takes a byte stream: bytes outside frames are handed on (to
  * the console); a candidate frame that fails (length over the maximum, bad
@@ -50,16 +51,19 @@ size_t frame_encode_response(uint8_t *out, size_t cap, uint8_t seq, uint8_t opco
 
 /* One received frame, or a failed candidate. */
 typedef struct {
-	int status;  /* WIRE_ST_OK, or CRC / OVERSIZE / TRUNCATED */
-	bool header; /* seq and op were received (maybe damaged if status != OK) */
-	uint8_t seq, op;
-	uint16_t crc; /* the frame's check value (identity of a request) */
+	int status;	 /* WIRE_ST_OK, or CRC / OVERSIZE / TRUNCATED */
+	bool header;	 /* seq and op were received (maybe damaged if status != OK) */
+	uint8_t seq, op; /* seq 0 / op 0 when the candidate ended before them */
+	uint16_t crc;	 /* the frame's check value (identity of a request) */
 	const uint8_t *payload;
 	size_t len;
 } frame_t;
 
 typedef void (*frame_fn)(void *ctx, const frame_t *f);
 typedef void (*frame_other_fn)(void *ctx, const uint8_t *data, size_t n);
+/* True when a sync byte arriving now belongs to the other stream (a console
+ * line of text is in progress), so it starts no frame. */
+typedef bool (*frame_hold_fn)(void *ctx);
 
 typedef struct {
 	uint32_t frames; /* good frames */
@@ -78,6 +82,8 @@ typedef struct {
 	frame_fn on_frame;
 	frame_other_fn on_other;
 	void *ctx;
+	frame_hold_fn hold; /* optional */
+	void *hold_ctx;
 	frame_rx_stats_t st;
 } frame_rx_t;
 
@@ -85,6 +91,9 @@ typedef struct {
  * may be NULL (bytes outside frames are then only counted). */
 void frame_rx_init(frame_rx_t *rx, uint8_t *buf, size_t max_payload, frame_fn on_frame,
 		   frame_other_fn on_other, void *ctx);
+/* Sets the predicate that keeps a sync byte in the other stream (NULL: a
+ * sync byte outside a frame always starts one). */
+void frame_rx_set_hold(frame_rx_t *rx, frame_hold_fn hold, void *ctx);
 /* Feeds received bytes; calls on_frame / on_other as they complete. */
 void frame_rx_feed(frame_rx_t *rx, const uint8_t *data, size_t n, uint32_t now_ms);
 /* Applies the inter-byte timeout: an unfinished frame older than

@@ -39,6 +39,13 @@ static void console_bytes(void *ctx, const uint8_t *data, size_t n)
 	console_feed(l->con, data, n);
 }
 
+static bool console_text(void *ctx)
+{
+	const link_t *l = ctx;
+
+	return console_in_text(l->con);
+}
+
 void link_format_stats(const link_t *l, char *buf, size_t cap)
 {
 	const frame_rx_stats_t *r = &l->fs.rx.st;
@@ -80,6 +87,7 @@ void link_init(link_t *l, console_t *con, const vs_link_t *io)
 	con->wctx = l;
 	console_set_extra(con, link_extra, l);
 	frame_srv_init(&l->fs, con->v, frame_write, l, console_bytes, l);
+	frame_rx_set_hold(&l->fs.rx, console_text, l);
 }
 
 void link_feed(link_t *l, const uint8_t *data, size_t n, uint32_t now_ms)

@@ -2,8 +2,9 @@
  * binary frames.
  *
  * Bytes are told apart by the frame sync byte (FRAME_SYNC, 0xA5): outside a
- * frame, a sync byte starts one and every other byte belongs to the console;
- * a console line is printable ASCII, so it never contains a sync byte. The
+ * frame, a sync byte starts one unless a console line of text is in progress
+ * (console_in_text: the UTF-8 of a comment may hold 0xA5), and every other
+ * byte belongs to the console. The
  * bytes of a failed frame candidate after its sync go back to the console
  * path (which rejects a line with binary bytes), so both sides resynchronise.
  * Console replies and frame answers go out whole, never interleaved.

@@ -36,8 +36,9 @@ common=("$build/vehicle-sim" "$build/vehiclectl" "$here/qemu/can_lib.sh"
 # Debian python3 (python3-can imports only there).
 py=/usr/bin/python3
 pyfiles=()
-if ! mods=$("$py" "$here/qemu/can_python.py" --list-modules 2>&1); then
-	printf '%s\n' "$mods"
+if ! mods=$("$py" "$here/qemu/can_python.py" --list-modules 2>&1) ||
+	! mods2=$(PYTHONPATH=$top/python "$py" "$here/qemu/can_vs.py" --list-modules 2>&1); then
+	printf '%s\n%s\n' "$mods" "${mods2:-}"
 	echo "qemu: $py cannot import python3-can (apt-get install python3-can)"
 	summary 0 1
 	exit 1
@@ -45,7 +46,7 @@ fi
 pyfiles+=("$(readlink -f "$py")=/usr/bin/python3")
 declare -A seen=()
 while IFS= read -r f; do
-	case $f in "$here"/*) continue ;; esac
+	case $f in "$here"/* | "$top"/python/*) continue ;; esac
 	[ -n "${seen[$f]:-}" ] && continue
 	seen[$f]=1
 	case $f in
@@ -56,7 +57,12 @@ while IFS= read -r f; do
 		;;
 	*) pyfiles+=("$f=$f") ;;
 	esac
-done <<<"$mods"
+done <<<"$mods
+$mods2"
+# the Python client itself, as sources
+for f in "$top"/python/vehicleservice/*.py; do
+	pyfiles+=("$f=/test/vehicleservice/$(basename "$f")")
+done
 
 passed=0; failed=0; failed_names=""
 run() {
@@ -76,7 +82,8 @@ run() {
 }
 t0=$(date +%s)
 run can_link.sh "${common[@]}"
-run can_peers.sh "${common[@]}" "$here/qemu/can_python.py" "${pyfiles[@]}"
+run can_peers.sh "${common[@]}" "$here/qemu/can_python.py" "$here/qemu/can_vs.py" "${pyfiles[@]}"
+run can_isotp.sh "${common[@]}"
 echo "qemu: guests took $(($(date +%s) - t0)) s"
 [ -n "$failed_names" ] && echo "qemu: FAILED:$failed_names"
 summary "$passed" "$failed"

@@ -32,8 +32,10 @@ typedef struct {
 	sim_t sim;
 	canlink_t link;
 	canlink_frame_t q[QN]; /* unit -> host */
+	uint64_t qt[QN];       /* when each was sent, simulated us */
 	size_t head, tail;
 	bool refuse;   /* the unit's transmit queue is full */
+	bool lose;     /* answers are lost, flow control frames go through */
 	uint32_t sent; /* frames the unit sent */
 } unit_t;
 
@@ -48,7 +50,10 @@ static bool unit_send(void *ctx, const canlink_frame_t *f)
 
 	if (u->refuse)
 		return false;
+	if (u->lose && (f->data[0] & 0xF0u) != CANLINK_PCI_FLOW)
+		return true;
 	assert_true(u->tail - u->head < QN);
+	u->qt[u->tail % QN] = u->sim.now_us;
 	u->q[u->tail++ % QN] = *f;
 	u->sent++;
 	return true;
@@ -512,11 +517,18 @@ static void test_reassembly_errors(void **state)
 	f = frame(0x601, 3, "050102");
 	assert_int_equal(canlink_rx_feed(&rx, &f, 0),
 			 CANLINK_RX_BAD_DLC); /* 5 announced, 2 there */
-	for (unsigned t = 3; t <= 15; t++) {
+	for (unsigned t = 4; t <= 15; t++) {
 		f = frame(0x601, 8, "0001020304050607");
 		f.data[0] = (uint8_t)(t << 4);
 		assert_int_equal(canlink_rx_feed(&rx, &f, 0), CANLINK_RX_BAD_PCI);
 	}
+	/* flow control: for the sender, taken whatever its status; DLC 3 at least */
+	f = frame(0x601, 3, "300000");
+	assert_int_equal(canlink_rx_feed(&rx, &f, 0), CANLINK_RX_FLOW);
+	f = frame(0x601, 8, "3F00000000000000");
+	assert_int_equal(canlink_rx_feed(&rx, &f, 0), CANLINK_RX_FLOW);
+	f = frame(0x601, 2, "3000");
+	assert_int_equal(canlink_rx_feed(&rx, &f, 0), CANLINK_RX_BAD_DLC);
 	f = frame(0x601, 7, "100A010203040506");
 	assert_int_equal(canlink_rx_feed(&rx, &f, 0), CANLINK_RX_BAD_DLC); /* first not 8 */
 	f = frame(0x601, 8, "1007010203040506");
@@ -545,6 +557,15 @@ static void test_reassembly_errors(void **state)
 		f.data[0] = (uint8_t)(0x20 | i);
 		assert_int_equal(canlink_rx_feed(&rx, &f, 0), CANLINK_RX_DISCARDED);
 	}
+	/* a flow control frame between consecutive frames leaves the message */
+	f = frame(0x601, 8, "100A010203040506");
+	assert_int_equal(canlink_rx_feed(&rx, &f, 0), CANLINK_RX_PENDING);
+	f = frame(0x601, 3, "300008");
+	assert_int_equal(canlink_rx_feed(&rx, &f, 0), CANLINK_RX_FLOW);
+	f = frame(0x601, 5, "2107080910");
+	assert_int_equal(canlink_rx_feed(&rx, &f, 0), CANLINK_RX_DONE);
+	assert_int_equal(rx.len, 10);
+	assert_int_equal(buf[9], 0x10);
 	/* a new single frame resynchronises at once, and aborts a started one */
 	f = frame(0x601, 8, "1014010203040506");
 	assert_int_equal(canlink_rx_feed(&rx, &f, 1000), CANLINK_RX_PENDING);
@@ -601,13 +622,18 @@ static void test_wire_layout(void **state)
 	/* response: seq, opcode, status 0, result 1, state 0x0019,
 	 * "Unpowered" (u8 9 + 9 bytes) = 3 + 1 + 2 + 10 = 16 bytes */
 	expect_frame(0x581, 8, "1010050B00011900");
+	/* the rest after the host's flow control: go on, block size 0 */
+	assert_int_equal(pending(), 0);
+	send_raw(0x601, 3, "300000");
 	expect_frame(0x581, 8, "2109556E706F7765"); /* 9, "Unpowe" */
 	expect_frame(0x581, 4, "22726564");	    /* "red" */
 	assert_int_equal(pending(), 0);
 
 	/* moveForward -20.5 mm, seq 6: 2 + 8 = 10 bytes, a first frame and
-	 * one consecutive frame; refused (Unpowered): result 0 */
+	 * one consecutive frame; refused (Unpowered): result 0. The first
+	 * frame is answered with flow control: go on, block size 0, STmin 0. */
 	send_raw(0x601, 8, "100A061100000000");
+	expect_frame(0x581, 3, "300000");
 	assert_int_equal(pending(), 0);
 	send_raw(0x601, 5, "21008034C0");
 	expect_frame(0x581, 5, "0406110000");
@@ -620,11 +646,92 @@ static void test_wire_layout(void **state)
 	/* setPower with boolean 2: NAK reason 5 (value) */
 	send_raw(0x601, 4, "03091E02");
 	expect_frame(0x581, 4, "03091E05");
-	/* a request longer than any operation's: NAK 2 at the first frame */
+	/* a request longer than any operation's: flow control "overflow",
+	 * then NAK 2 */
 	send_raw(0x601, 8, "10400A1100000000");
+	expect_frame(0x581, 3, "320000");
 	expect_frame(0x581, 4, "030A1102");
 	assert_int_equal(U.link.stats.naks, 4);
 	assert_int_equal(U.link.stats.requests, 2);
+	assert_int_equal(U.link.stats.fc_sent, 2);
+	assert_int_equal(U.link.stats.rx_flow, 1);
+	assert_int_equal(U.link.stats.rx_bad_pci, 0);
+}
+
+/* A long response under the host's flow control (ISO 15765-2): block size
+ * and STmin honoured, "wait" restarts the wait, "overflow" and silence give
+ * the response up; a flow control frame nobody waits for is ignored. */
+static void test_response_flow_control(void **state)
+{
+	static const char ver[] = "RTC VehicleService interface: ver.2.0.0";
+	uint8_t buf[CANLINK_RESP_MAX];
+	canlink_rx_t rx;
+	canlink_frame_t f;
+	size_t first;
+
+	(void)state;
+	canlink_rx_init(&rx, buf, sizeof(buf));
+	/* getIFVersion: 3 + 1 + 1 + 39 = 44 bytes, first frame and 6 more */
+	send_raw(0x601, 3, "022007");
+	f = pop();
+	assert_int_equal(canlink_rx_feed(&rx, &f, 0), CANLINK_RX_PENDING);
+	assert_int_equal(f.data[1], 44);
+	sim_run_ms(&U.sim, 900);
+	assert_int_equal(pending(), 0);
+	/* block size 2, STmin 5 ms: one at once, the next 5 ms later */
+	first = U.tail;
+	send_raw(0x601, 3, "300205");
+	assert_int_equal(pending(), 1);
+	sim_run_ms(&U.sim, 20);
+	assert_int_equal(pending(), 2);
+	assert_true(U.qt[(first + 1) % QN] - U.qt[first % QN] >= 5000);
+	assert_true(U.qt[(first + 1) % QN] - U.qt[first % QN] <= 6000);
+	/* "wait" restarts the 1 s wait: 1.8 s in all, still there */
+	send_raw(0x601, 3, "310000");
+	sim_run_ms(&U.sim, 900);
+	send_raw(0x601, 3, "310000");
+	sim_run_ms(&U.sim, 900);
+	assert_int_equal(pending(), 2);
+	assert_int_equal(U.link.stats.tx_fc_timeouts, 0);
+	/* the rest, STmin 500 us (0xF5): one frame per 1 ms tick */
+	first = U.tail;
+	send_raw(0x601, 3, "3000F5");
+	sim_run_ms(&U.sim, 10);
+	assert_int_equal(pending(), 6);
+	for (unsigned i = 1; i < 4; i++)
+		assert_int_equal(U.qt[(first + i) % QN] - U.qt[(first + i - 1) % QN], 1000);
+	for (unsigned i = 0; i < 6; i++) {
+		f = pop();
+		assert_int_equal(canlink_rx_feed(&rx, &f, 0),
+				 i == 5 ? CANLINK_RX_DONE : CANLINK_RX_PENDING);
+	}
+	assert_int_equal(rx.len, 44);
+	assert_memory_equal(buf + 5, ver, 39);
+	assert_int_equal(U.link.stats.tx_abandoned + U.link.stats.tx_overflow, 0);
+
+	/* no flow control within 1 s: the response is given up */
+	send_raw(0x601, 3, "022107");
+	expect_frame(0x581, 8, "102C210700012752");
+	sim_run_ms(&U.sim, 1002);
+	assert_int_equal(U.link.stats.tx_fc_timeouts, 1);
+	send_raw(0x601, 3, "300000"); /* late: ignored */
+	assert_int_equal(pending(), 0);
+	/* overflow: given up at once */
+	send_raw(0x601, 3, "022207");
+	expect_frame(0x581, 8, "102C220700012752");
+	send_raw(0x601, 3, "320000");
+	sim_run_ms(&U.sim, 10);
+	assert_int_equal(pending(), 0);
+	assert_int_equal(U.link.stats.tx_overflow, 1);
+	/* a retransmission is answered from the cache, under flow control too */
+	send_raw(0x601, 3, "022207");
+	expect_frame(0x581, 8, "102C220700012752");
+	send_raw(0x601, 3, "300000");
+	assert_int_equal(pending(), 6);
+	assert_int_equal(U.link.stats.replays, 1);
+	assert_int_equal(U.link.stats.requests, 3);
+	assert_int_equal(U.link.stats.rx_flow, 7);
+	assert_int_equal(U.link.stats.rx_bad_pci, 0);
 }
 
 static void test_node_id(void **state)
@@ -668,6 +775,7 @@ static void test_retransmission_runs_once(void **state)
 	static const char *cf[3] = {"2100C07240000000", "2200000000000000", "23000000000000"};
 	for (int rep_i = 0; rep_i < 2; rep_i++) {
 		send_raw(0x601, 8, ff);
+		expect_frame(0x581, 3, "300000");
 		send_raw(0x601, 8, cf[0]);
 		send_raw(0x601, 8, cf[1]);
 		send_raw(0x601, 7, cf[2]);
@@ -678,6 +786,7 @@ static void test_retransmission_runs_once(void **state)
 	assert_int_equal(U.link.stats.replays, 1);
 	/* the same bytes under a new sequence number run again */
 	send_raw(0x601, 8, "101A411300000000");
+	expect_frame(0x581, 3, "300000");
 	send_raw(0x601, 8, cf[0]);
 	send_raw(0x601, 8, cf[1]);
 	send_raw(0x601, 7, cf[2]);
@@ -686,13 +795,13 @@ static void test_retransmission_runs_once(void **state)
 	assert_int_equal(d.queue_len, 2);
 	/* through the client: the answer to the first attempt is lost, the
 	 * retry (same sequence number) is answered from the cache */
-	U.refuse = true;
+	U.lose = true;
 	C.timeout_ms = 50;
 	C.retries = 0;
 	bool ret = true;
 	vs_position_t p = {600, 0, 0};
 	assert_int_equal(vc_moveLinearAbs(&C, &ret, p), VC_E_TIMEOUT);
-	U.refuse = false;
+	U.lose = false;
 	U.head = U.tail; /* whatever was half sent */
 	vehicle_diag(sim_vehicle(&U.sim), &d);
 	assert_int_equal(d.queue_len, 3);
@@ -957,10 +1066,30 @@ static void test_bad_frames_counted(void **state)
 	U.head = U.tail;
 	canlink_stats_t s0 = U.link.stats;
 	unsigned n_dlc = 0, n_pci = 0, n_seq = 0, n_disc = 0, n_over = 0, n_nak = 0, n_foreign = 0;
-	unsigned n_timeout = 0, n_abort = 0, n_short = 0;
+	unsigned n_timeout = 0, n_abort = 0, n_short = 0, n_flow = 0, n_cts = 0, n_ovfl = 0;
+	unsigned got_nak = 0, got_cts = 0, got_ovfl = 0;
 
 	for (unsigned i = 0; i < 20000; i++) {
 		canlink_frame_t f;
+		/* Every frame the unit sent: a NAK (a single frame with a
+		 * non-zero reason) or a flow control frame for a first frame. */
+		while (pending()) {
+			f = pop();
+			assert_int_equal(f.id, 0x581);
+			if (f.dlc == CANLINK_FC_DLC) {
+				assert_true(f.data[0] == 0x30 || f.data[0] == 0x32);
+				assert_int_equal(f.data[1], 0);
+				assert_int_equal(f.data[2], 0);
+				got_cts += f.data[0] == 0x30;
+				got_ovfl += f.data[0] == 0x32;
+				continue;
+			}
+			assert_int_equal(f.dlc, 4);
+			assert_int_equal(f.data[0], 3);
+			assert_true(f.data[3] == WIRE_ST_OVERSIZE || f.data[3] == WIRE_ST_OPCODE ||
+				    f.data[3] == WIRE_ST_LENGTH || f.data[3] == WIRE_ST_TRUNCATED);
+			got_nak++;
+		}
 		memset(&f, 0, sizeof(f));
 		f.id = 0x601;
 		f.dlc = 8;
@@ -971,8 +1100,15 @@ static void test_bad_frames_counted(void **state)
 			f.dlc = 0;
 			n_dlc++;
 			break;
-		case 1: /* reserved frame types */
-			f.data[0] = (uint8_t)((3 + rnd() % 13) << 4 | (f.data[0] & 15));
+		case 1: /* reserved frame types; flow control frames nobody waits
+			 * for are taken silently */
+			if (rnd() % 2) {
+				f.data[0] = (uint8_t)(0x30 | (f.data[0] & 15));
+				f.dlc = (uint8_t)(3 + rnd() % 6);
+				n_flow++;
+				break;
+			}
+			f.data[0] = (uint8_t)((4 + rnd() % 12) << 4 | (f.data[0] & 15));
 			n_pci++;
 			break;
 		case 2: /* consecutive frame without a first */
@@ -1001,6 +1137,7 @@ static void test_bad_frames_counted(void **state)
 			}
 			n_over++;
 			n_nak++;
+			n_ovfl++;
 			n_disc += 3;
 			continue;
 		}
@@ -1032,6 +1169,7 @@ static void test_bad_frames_counted(void **state)
 			f.dlc = 2;
 			n_abort++;
 			n_short++;
+			n_cts++;
 			break;
 		default: /* a first frame left hanging until it times out */
 			f.data[0] = 0x10;
@@ -1040,6 +1178,7 @@ static void test_bad_frames_counted(void **state)
 			sim_run_ms(&U.sim, CANLINK_RX_TIMEOUT_US / 1000 + 2);
 			n_timeout++;
 			n_nak++;
+			n_cts++;
 			continue;
 		}
 		canlink_rx(&U.link, &f, now_us());
@@ -1055,17 +1194,22 @@ static void test_bad_frames_counted(void **state)
 	assert_int_equal(s.rx_aborted - s0.rx_aborted, n_abort);
 	assert_int_equal(s.rx_short - s0.rx_short, n_short);
 	assert_int_equal(s.naks - s0.naks, n_nak);
+	assert_int_equal(s.rx_flow - s0.rx_flow, n_flow);
+	assert_int_equal(s.fc_sent - s0.fc_sent, n_cts + n_ovfl);
 	assert_int_equal(s.requests, s0.requests);
-	/* every NAK went out, each a single frame with a non-zero reason */
-	assert_int_equal(pending(), n_nak);
+	/* every NAK and flow control frame went out */
 	while (pending()) {
 		canlink_frame_t f = pop();
-		assert_int_equal(f.id, 0x581);
-		assert_int_equal(f.dlc, 4);
-		assert_int_equal(f.data[0], 3);
-		assert_true(f.data[3] == WIRE_ST_OVERSIZE || f.data[3] == WIRE_ST_OPCODE ||
-			    f.data[3] == WIRE_ST_LENGTH || f.data[3] == WIRE_ST_TRUNCATED);
+		if (f.dlc == CANLINK_FC_DLC) {
+			got_cts += f.data[0] == 0x30;
+			got_ovfl += f.data[0] == 0x32;
+		} else {
+			got_nak++;
+		}
 	}
+	assert_int_equal(got_nak, n_nak);
+	assert_int_equal(got_cts, n_cts);
+	assert_int_equal(got_ovfl, n_ovfl);
 	still_paused_then_completes();
 }
 
@@ -1132,6 +1276,7 @@ int main(void)
 	    cmocka_unit_test_setup_teardown(test_info, setup, teardown),
 	    cmocka_unit_test_setup_teardown(test_typed_functions, setup, teardown),
 	    cmocka_unit_test_setup_teardown(test_wire_layout, setup, teardown),
+	    cmocka_unit_test_setup_teardown(test_response_flow_control, setup, teardown),
 	    cmocka_unit_test_setup_teardown(test_node_id, setup, teardown),
 	    cmocka_unit_test_setup_teardown(test_retransmission_runs_once, setup, teardown),
 	    cmocka_unit_test_setup_teardown(test_client_retry, setup, teardown),

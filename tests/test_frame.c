@@ -151,13 +151,32 @@ static void test_rx_oversize_and_truncated(void **state)
 
 	(void)state;
 	rx_reset(FRAME_REQ_PAYLOAD_MAX);
-	/* 65 > 64: rejected as soon as the length is in */
+	/* 65 > 64: rejected as soon as the seq byte is in, which it echoes */
 	frame_rx_feed(&RX, s, 3, 0);
+	assert_int_equal(R.n, 0);
+	frame_rx_feed(&RX, s + 3, 1, 0);
 	assert_int_equal(R.n, 1);
 	assert_int_equal(R.f[0].status, WIRE_ST_OVERSIZE);
 	assert_false(R.f[0].header);
+	assert_int_equal(R.f[0].seq, 3);
 	assert_int_equal(RX.st.oversize, 1);
 	assert_false(frame_rx_busy(&RX));
+	/* the length alone, then silence: truncated, no seq to echo */
+	rx_reset(FRAME_REQ_PAYLOAD_MAX);
+	frame_rx_feed(&RX, s, 3, 0);
+	frame_rx_poll(&RX, FRAME_RX_TIMEOUT_MS);
+	assert_int_equal(R.n, 1);
+	assert_int_equal(R.f[0].status, WIRE_ST_TRUNCATED);
+	assert_int_equal(R.f[0].seq, 0);
+	assert_int_equal(RX.st.oversize, 0);
+	/* cut short after the seq byte: truncated with that seq */
+	rx_reset(FRAME_REQ_PAYLOAD_MAX);
+	frame_rx_feed(&RX, (const uint8_t[]){FRAME_SYNC, 8, 0, 0x52}, 4, 0);
+	frame_rx_poll(&RX, FRAME_RX_TIMEOUT_MS);
+	assert_int_equal(R.n, 1);
+	assert_int_equal(R.f[0].status, WIRE_ST_TRUNCATED);
+	assert_false(R.f[0].header);
+	assert_int_equal(R.f[0].seq, 0x52);
 
 	/* A frame cut short: reported after the inter-byte timeout, not before */
 	rx_reset(FRAME_REQ_PAYLOAD_MAX);
@@ -207,6 +226,45 @@ static void test_rx_random_bytes_never_overrun(void **state)
 		assert_int_equal(R.f[0].status, WIRE_ST_OK);
 		assert_int_equal(R.f[0].seq, 0x33);
 	}
+}
+
+/* The hold predicate: while it says so, a sync byte is a byte of the other
+ * stream (a console line of text), never the start of a frame. */
+static bool HOLD;
+
+static bool hold_fn(void *ctx)
+{
+	(void)ctx;
+	return HOLD;
+}
+
+static void test_rx_hold_keeps_sync_in_other(void **state)
+{
+	static const uint8_t yen[] = {'#', ' ', 0xC2, FRAME_SYNC, ' ', 'y', 'e', 'n'};
+	uint8_t b[16];
+	size_t nb = frame_encode(b, sizeof(b), 0x21, 11, NULL, 0);
+
+	(void)state;
+	rx_reset(FRAME_REQ_PAYLOAD_MAX);
+	frame_rx_set_hold(&RX, hold_fn, NULL);
+	HOLD = true;
+	frame_rx_feed(&RX, yen, sizeof(yen), 0);
+	assert_int_equal(R.n, 0);
+	assert_int_equal(R.nother, sizeof(yen));
+	assert_memory_equal(R.other, yen, sizeof(yen));
+	assert_false(frame_rx_busy(&RX));
+	/* a whole frame while held: all of it is other bytes */
+	frame_rx_feed(&RX, b, nb, 0);
+	assert_int_equal(R.n, 0);
+	assert_int_equal(R.nother, sizeof(yen) + nb);
+	assert_int_equal(RX.st.other_bytes, sizeof(yen) + nb);
+	/* not held: the same frame is one */
+	HOLD = false;
+	frame_rx_feed(&RX, b, nb, 0);
+	assert_int_equal(R.n, 1);
+	assert_int_equal(R.f[0].status, WIRE_ST_OK);
+	assert_int_equal(R.f[0].seq, 0x21);
+	assert_int_equal(RX.st.oversize + RX.st.crc_errors + RX.st.truncated, 0);
 }
 
 /* The unit's server: NAKs, duplicate detection. */
@@ -308,6 +366,45 @@ static void test_server_duplicates(void **state)
 		frame_srv_feed(&fs, f, k, 0);
 		assert_int_equal(NOUT, 0);
 	}
+}
+
+/* NAKs of untrusted frames carry op 0x80 and the seq received, exactly as
+ * docs/protocol.md says; opcode 0x00 is NAKed the same way. */
+static void test_server_naks_echo_seq(void **state)
+{
+	static frame_srv_t fs;
+	static const uint8_t over[] = {0xA5, 1, 0, 0x53, 0x80, 2, 0x19, 0x87};
+	static const uint8_t trunc[] = {0xA5, 1, 0, 0x52, 0x80, 6, 0xAD, 0xF0};
+	static const uint8_t trunc0[] = {0xA5, 1, 0, 0, 0x80, 6};
+
+	(void)state;
+	boot();
+	frame_srv_init(&fs, &S.vehicle, out_write, NULL, NULL, NULL);
+	/* len 200, seq 0x53: oversize, answered at once with seq 0x53 */
+	NOUT = 0;
+	frame_srv_feed(&fs, (const uint8_t[]){0xA5, 0xC8, 0x00, 0x53, 0x0B}, 5, 0);
+	assert_int_equal(NOUT, sizeof(over));
+	assert_memory_equal(OUT, over, sizeof(over));
+	/* len 8, seq 0x52, then silence: truncated with seq 0x52 */
+	NOUT = 0;
+	frame_srv_feed(&fs, (const uint8_t[]){0xA5, 0x08, 0x00, 0x52}, 4, 1000);
+	frame_srv_poll(&fs, 1000 + FRAME_RX_TIMEOUT_MS - 1);
+	assert_int_equal(NOUT, 0);
+	frame_srv_poll(&fs, 1000 + FRAME_RX_TIMEOUT_MS);
+	assert_int_equal(NOUT, sizeof(trunc));
+	assert_memory_equal(OUT, trunc, sizeof(trunc));
+	/* only the sync and length: nothing received to echo, seq 0 */
+	NOUT = 0;
+	frame_srv_feed(&fs, (const uint8_t[]){0xA5, 0x08, 0x00}, 3, 2000);
+	frame_srv_poll(&fs, 2000 + FRAME_RX_TIMEOUT_MS);
+	assert_int_equal(NOUT, sizeof(trunc0) + 2);
+	assert_memory_equal(OUT, trunc0, sizeof(trunc0));
+	/* opcode 0x00: no such operation, NAKed with op 0x80 */
+	send(&fs, 0x44, 0x00, NULL, 0);
+	assert_int_equal(NOUT, 8);
+	assert_memory_equal(OUT, ((const uint8_t[]){0xA5, 1, 0, 0x44, 0x80, WIRE_ST_OPCODE}), 6);
+	assert_int_equal(fs.st.executed, 0);
+	assert_int_equal(fs.st.naks, 4);
 }
 
 /* docs/protocol.md */
@@ -480,6 +577,8 @@ int main(void)
 	    cmocka_unit_test(test_rx_bad_crc_resyncs),
 	    cmocka_unit_test(test_rx_oversize_and_truncated),
 	    cmocka_unit_test(test_rx_random_bytes_never_overrun),
+	    cmocka_unit_test(test_rx_hold_keeps_sync_in_other),
+	    cmocka_unit_test(test_server_naks_echo_seq),
 	    cmocka_unit_test(test_server_duplicates),
 	    cmocka_unit_test(test_doc_opcode_table),
 	    cmocka_unit_test(test_doc_examples),

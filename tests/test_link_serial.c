@@ -224,6 +224,40 @@ static void test_console_raw(void **state)
 	CON("getActiveAlarm 1", "ok true 1 1 120 warning \"moveForward refused: unit not ready\"");
 }
 
+/* A UTF-8 comment holding 0xA5 (the yen sign is C2 A5) is only a comment:
+ * inside a console line of text a sync byte starts no frame. */
+static void test_console_utf8(void **state)
+{
+	(void)state;
+	host_drain();
+	host_write("# caf\xC3\xA9 \xC2\xA5 yen\n", 15);
+	CON("getState", "ok true 25 \"Unpowered\"");
+	/* in an operation line it is a byte of that line: error 7, no NAK */
+	CON("getState \xC2\xA5", "error 7 binary data in line");
+	/* after the line ending, a frame is a frame again */
+	{
+		uint8_t f[16];
+		size_t k = frame_encode(f, sizeof(f), 0x31, CMD_OP_getServoStatus,
+					(const uint8_t *)"\0\0\0\0", 4);
+		uint8_t a[16];
+		size_t n = 0;
+		uint32_t end = mono_ms() + 2000;
+
+		host_write(f, k);
+		while (n < 10 && mono_ms() < end) {
+			struct pollfd pf = {SLAVE, POLLIN, 0};
+			ssize_t r;
+
+			if (poll(&pf, 1, 100) > 0 && (r = read(SLAVE, a + n, 10 - n)) > 0)
+				n += (size_t)r;
+		}
+		assert_int_equal(n, 10);
+		assert_memory_equal(a, ((const uint8_t[]){0xA5, 3, 0, 0x31, 0x8A, 0, 1, 0}), 8);
+	}
+	CON("$link", "ok frames 1 executed 1 duplicates 0 naks 0 crc 0 oversize 0 truncated 0 "
+		     "other 45 txdrop 0");
+}
+
 static vc_client_t C;
 
 static void wait_idle_client(void)
@@ -822,6 +856,7 @@ int main(int argc, char **argv)
 {
 	const struct CMUnitTest tests[] = {
 	    cmocka_unit_test_setup_teardown(test_console_raw, setup, teardown),
+	    cmocka_unit_test_setup_teardown(test_console_utf8, setup, teardown),
 	    cmocka_unit_test_setup_teardown(test_binary_client, setup, teardown),
 	    cmocka_unit_test_setup_teardown(test_console_client, setup, teardown),
 	    cmocka_unit_test_setup_teardown(test_retransmission_runs_once, setup, teardown),

@@ -131,6 +131,14 @@ static void sim_extras_replies(void **state)
 	assert_int_equal(sim.now_us, 0); /* none of that ran time */
 	expect("$wait 0", "ok wait 0");
 	assert_int_equal(sim.now_us, 0);
+	/* Real time runs by itself: '$wait' is refused, nothing waits. */
+	sim_set_realtime(&sim, true);
+	expect("$wait 500", "error 8 $wait runs simulated time only with --fast; in real time the "
+			    "host waits");
+	assert_int_equal(sim.now_us, 0);
+	sim_set_realtime(&sim, false);
+	expect("$wait 1", "ok wait 1");
+	assert_int_equal(sim.now_us, 1000);
 }
 
 static void relay_failure_through_console(void **state)

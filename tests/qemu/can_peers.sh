@@ -29,8 +29,10 @@ expected
 $2"
 }
 
-# getPosition (opcode 9), seq 0x05: 28-byte answer, five frames, pose 0 0 0
-exchange 5 601#020509
+# getPosition (opcode 9), seq 0x05: 28-byte answer, five frames, pose 0 0 0;
+# the host's flow control (go on, block size 0, STmin 0) lets the unit send
+# the frames after the first
+exchange 5 601#020509 601#300000
 check getPosition 'vcan0 581#101C050900010000
 vcan0 581#2100000000000000
 vcan0 581#2200000000000000
@@ -39,7 +41,7 @@ vcan0 581#2400'
 pass "getPosition: first frame + 4 consecutive frames as documented"
 
 # getState (11), seq 0x06: "Unpowered", state 0x0019
-exchange 3 601#02060B
+exchange 3 601#02060B 601#300000
 check getState 'vcan0 581#1010060B00011900
 vcan0 581#2109556E706F7765
 vcan0 581#22726564'
@@ -51,9 +53,11 @@ check setServo 'vcan0 581#04081F0001'
 # a retransmission of seq 0x08 is answered again from the cache
 exchange 1 601#03081F01
 check "setServo repeated" 'vcan0 581#04081F0001'
-# moveForward (17 = 0x11) 250.0 = 0x406F400000000000, seq 0x09, two frames
-exchange 1 601#100A091100000000 601#2100406F40
-check moveForward 'vcan0 581#0409110001'
+# moveForward (17 = 0x11) 250.0 = 0x406F400000000000, seq 0x09, two frames;
+# the unit answers the first frame with flow control
+exchange 2 601#100A091100000000 601#2100406F40
+check moveForward 'vcan0 581#300000
+vcan0 581#0409110001'
 pass "getState, setPower, setServo, retransmission, two-frame moveForward"
 
 # NAKs: unknown opcode 0x50 (4), stray byte after getPosition (3),
@@ -64,11 +68,13 @@ exchange 1 601#030B0900
 check "wrong length" 'vcan0 581#030B0903'
 exchange 1 601#030C1E02
 check "bad boolean" 'vcan0 581#030C1E05'
-exchange 1 601#10400D1100000000
-check "oversize" 'vcan0 581#030D1102'
+exchange 2 601#10400D1100000000
+check "oversize" 'vcan0 581#320000
+vcan0 581#030D1102'
 # a first frame left hanging: NAK 6 (truncated) after 250 ms
-exchange 1 601#10140E1100000000
-check "truncated" 'vcan0 581#030E1106'
+exchange 2 601#10140E1100000000
+check "truncated" 'vcan0 581#300000
+vcan0 581#030E1106'
 pass "NAK reasons 4, 3, 5, 2, 6 as documented"
 
 # heartbeat: three frames per group at 10 Hz; the 250 mm move is done by
@@ -97,4 +103,10 @@ start_sim --node 1 --status-hz 10
 PYTHONDONTWRITEBYTECODE=1 timeout 60 python3 /test/can_python.py || fail "can_python.py failed"
 stop_sim
 pass "python-can peer"
+
+# the vehicleservice package over CAN, against vehiclectl
+start_sim --node 1 --status-hz 10
+PYTHONDONTWRITEBYTECODE=1 timeout 60 python3 /test/can_vs.py || fail "can_vs.py failed"
+stop_sim
+pass "vehicleservice (Python client) over CAN"
 echo "$T: all passed"

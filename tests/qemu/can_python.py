@@ -35,6 +35,22 @@ def segment(msg):
     return frames
 
 
+def send(bus, data):
+    bus.send(can.Message(arbitration_id=REQ, data=data, is_extended_id=False))
+
+
+def recv_fc(bus, timeout=2.0):
+    """docs/can.md: the unit answers a first frame with flow control."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        m = bus.recv(max(0.0, deadline - time.monotonic()))
+        if m is None or m.arbitration_id != RSP or m.is_extended_id:
+            continue
+        if m.data[0] >> 4 == 3:
+            return m.data[0] & 15, m.data[1], m.data[2]
+    fail("no flow control within %.1f s" % timeout)
+
+
 def recv_message(bus, timeout=2.0):
     """Reassembles the next response message."""
     deadline = time.monotonic() + timeout
@@ -49,6 +65,7 @@ def recv_message(bus, timeout=2.0):
         if pci == 1:
             want = (m.data[0] & 15) << 8 | m.data[1]
             data, index = bytes(m.data[2:8]), 1
+            send(bus, b"\x30\x00\x00")  # go on, all at once
         elif pci == 2 and want is not None:
             if m.data[0] & 15 != index & 15:
                 fail("consecutive frame index %d, expected %d" % (m.data[0] & 15, index))
@@ -65,8 +82,14 @@ SEQ = [0x30]
 def call(bus, opcode, payload=b""):
     """Returns (status, response payload)."""
     SEQ[0] = (SEQ[0] + 1) & 0xFF
-    for f in segment(bytes([SEQ[0], opcode]) + payload):
-        bus.send(can.Message(arbitration_id=REQ, data=f, is_extended_id=False))
+    frames = segment(bytes([SEQ[0], opcode]) + payload)
+    send(bus, frames[0])
+    if len(frames) > 1:
+        fs, bs, _ = recv_fc(bus)
+        if (fs, bs) != (0, 0):
+            fail("flow control %d, block size %d: expected go on, 0" % (fs, bs))
+    for f in frames[1:]:
+        send(bus, f)
     msg = recv_message(bus)
     if msg[0] != SEQ[0] or msg[1] != opcode:
         fail("response header %s for seq %d opcode %d" % (msg[:2].hex(), SEQ[0], opcode))

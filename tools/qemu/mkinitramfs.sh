@@ -148,8 +148,9 @@ replace_tool() {
 replace_tool bash required
 # iproute2's ip: busybox ip lacks -details, CAN options and most link kinds.
 replace_tool ip required
-for t in cansend candump cangen; do replace_tool "$t" required; done
-for t in isotpsend isotprecv isotpdump cansequence canplayer; do replace_tool "$t" optional; done
+# isotpsend/isotprecv: the kernel ISO-TP peer of tests/qemu/can_isotp.sh.
+for t in cansend candump cangen isotpsend isotprecv; do replace_tool "$t" required; done
+for t in isotpdump cansequence canplayer; do replace_tool "$t" optional; done
 for t in gpioget gpioset gpiodetect gpioinfo gpiofind gpiomon; do replace_tool "$t" required; done
 
 # Kernel modules, decompressed here (busybox insmod passes the file as is)
@@ -187,8 +188,7 @@ add_module() {
 		esac
 	done <<<"$deps"
 }
-for m in can can-raw can-dev vcan uinput evdev; do add_module "$m" required; done
-add_module can-isotp optional
+for m in can can-raw can-dev vcan uinput evdev can-isotp; do add_module "$m" required; done
 for m in "${extra_modules[@]}"; do add_module "$m" required; done
 add_module_file "$testchip"
 
