@@ -106,9 +106,11 @@ $(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(TEST_SUPPORT_LIB) $(HOST_LIBS)
 run: $(BUILD)/vehicle-sim
 	$(BUILD)/vehicle-sim --config config/vehicle.xml --io config/io.xml --realtime
 
-# Suites that boot a Debian kernel under QEMU (real SocketCAN, GPIO, uinput);
-# QEMU=0 leaves them out for a quick local run.
-CHECK_SUITES := $(if $(filter 0,$(QEMU)),,tests/run_qemu_tests.sh tests/qemu/run_fw.sh)
+# Suites under QEMU: a Debian kernel (real SocketCAN, GPIO, uinput) and the
+# Cortex-M images on emulated boards (mk/cortexm.mk builds them); QEMU=0
+# leaves them out for a quick local run.
+CHECK_SUITES := $(if $(filter 0,$(QEMU)),,tests/run_qemu_tests.sh tests/qemu/run_fw.sh \
+	tests/mcu/run_mcu.sh)
 
 check: all
 	$(Q)tests/run_tests.sh $(BUILD) $(TESTS) -- $(CHECK_SUITES)

@@ -8,7 +8,9 @@
 #                           objects reference any floating-point helper
 #   ARM_PREFIX=             toolchain prefix (default arm-none-eabi-)
 #
-# `make check` also runs the self-test of that floating-point check.
+# `make check` also runs the self-test of that floating-point check, and
+# (unless QEMU=0) builds both images, the M4 against its budget, for
+# tests/mcu/run_mcu.sh to boot them in QEMU.
 
 ARM_PREFIX ?= arm-none-eabi-
 ARM_CC := $(ARM_PREFIX)gcc
@@ -113,3 +115,12 @@ nofloat-selftest:
 	$(Q)echo "nofloat self-test: passed (double multiply detected, __aeabi_ldivmod accepted)"
 
 check: nofloat-selftest
+
+.PHONY: mcu-images
+mcu-images:
+	$(Q)$(MAKE) --no-print-directory TARGET=cortex-m4 BUILD=$(BUILD) cortexm
+	$(Q)$(MAKE) --no-print-directory TARGET=cortex-m0 BUILD=$(BUILD) $(BUILD)/cortex-m0/vehicle.elf
+
+ifneq ($(QEMU),0)
+check: mcu-images
+endif

@@ -467,6 +467,7 @@ void console_init(console_t *c, vehicle_t *v, console_write_fn write, void *wctx
 	c->v = v;
 	c->write = write;
 	c->wctx = wctx;
+	(void)cmd_table_crc(); /* now, so that $version and protocol info cost no tick */
 }
 
 void console_set_extra(console_t *c, console_extra_fn fn, void *ctx)

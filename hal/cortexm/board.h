@@ -5,6 +5,7 @@
 #ifndef BOARD_H
 #define BOARD_H
 
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -20,15 +21,26 @@
 #define BOARD_UART_BAUD 115200u
 #endif
 
+#ifndef BOARD_UART_RX_IRQ
+#define BOARD_UART_RX_IRQ 0 /* UART0 receive on the MPS2 boards */
+#endif
+
 /* UART: init, and the command link over it (never blocks; transmit bytes
  * wait in a ring and go out from uart_poll_tx). */
 void uart_init(void);
 void uart_poll_tx(void);
+/* True while a received byte waits or the transmit ring holds bytes. */
+bool uart_busy(void);
+void UART_RX_Handler(void);
 extern const vs_link_t uart_link;
 
 /* SysTick: one interrupt per control period; the handler only counts. */
 void systick_init(uint32_t tick_hz);
 uint32_t systick_count(void);
+/* Processor cycles since systick_init, modulo 2^32 (periods and the
+ * counter's position in the current one): the cost of a piece of code is
+ * the difference of two readings. */
+uint32_t systick_cycles(void);
 void SysTick_Handler(void);
 
 #endif

@@ -15,6 +15,12 @@ typedef struct {
 #define UART	   ((cmsdk_uart_t *)BOARD_UART_BASE)
 #define ST_TX_FULL 1u
 #define ST_RX_FULL 2u
+#define CTRL_TX_EN 1u
+#define CTRL_RX_EN 2u
+#define CTRL_RX_IE 8u
+#define INT_RX	   2u
+
+#define NVIC_ISER0 (*(volatile uint32_t *)0xE000E100u)
 
 #define TX_RING 1024u /* power of two; holds a whole console reply (CONSOLE_REPLY_MAX) */
 
@@ -24,7 +30,20 @@ static uint32_t tx_head, tx_tail; /* free-running; head - tail = bytes queued */
 void uart_init(void)
 {
 	UART->bauddiv = BOARD_CPU_HZ / BOARD_UART_BAUD;
-	UART->ctrl = 3u;
+	/* The receive interrupt only wakes the main loop from its sleep
+	 * (board_main.c); the bytes are still read by polling. */
+	UART->ctrl = CTRL_TX_EN | CTRL_RX_EN | CTRL_RX_IE;
+	NVIC_ISER0 = 1u << BOARD_UART_RX_IRQ;
+}
+
+void UART_RX_Handler(void)
+{
+	UART->intstatus = INT_RX; /* write one to clear */
+}
+
+bool uart_busy(void)
+{
+	return (UART->state & ST_RX_FULL) || tx_head != tx_tail;
 }
 
 void uart_poll_tx(void)
