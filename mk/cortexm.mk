@@ -67,6 +67,17 @@ $(MCU)/vehicle.elf: $(call mcu_objs,$(MCU_BOARD_SRC)) $(MCU)/libproto.a $(MCU)/l
 		-Wl,--gc-sections -Wl,-Map=$(MCU)/vehicle.map -T hal/cortexm/$(TARGET).ld \
 		-o $@ $(filter %.o %.a,$^) -lm -lc -lnosys -lgcc
 
+# The tick-cost benchmark for QEMU's mps2-an386 (make bench, tools/bench/
+# mcu_tickcost.sh): the host's scenarios on the same libraries and board code.
+MCU_CFLAGS_tools := $(MCU_BASE)
+MCU_BENCH_SRC := $(addprefix tools/bench/,mcu_tickcost.c scenario.c rig.c) \
+	$(addprefix hal/cortexm/,startup.c systick.c uart.c loop_hal.c)
+$(MCU)/bench.elf: $(call mcu_objs,$(MCU_BENCH_SRC)) $(MCU)/libfirmware.a hal/cortexm/$(TARGET).ld
+	@$(if $(Q),echo "  LD      $@")
+	$(Q)$(ARM_CC) $(MCU_CPU_$(TARGET)) -Os -nostartfiles --specs=nano.specs \
+		-Wl,--gc-sections -T hal/cortexm/$(TARGET).ld \
+		-o $@ $(filter %.o %.a,$^) -lm -lc -lnosys -lgcc
+
 # Tick path: every firmware object but the double boundary.
 MCU_TICK_OBJS := $(call mcu_objs,$(filter-out $(FW_FLOAT_OK),$(FW_SRC)))
 
