@@ -5,7 +5,6 @@
 #ifndef BOARD_H
 #define BOARD_H
 
-#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -21,17 +20,10 @@
 #define BOARD_UART_BAUD 115200u
 #endif
 
-#ifndef BOARD_UART_RX_IRQ
-#define BOARD_UART_RX_IRQ 0 /* UART0 receive on the MPS2 boards */
-#endif
-
 /* UART: init, and the command link over it (never blocks; transmit bytes
  * wait in a ring and go out from uart_poll_tx). */
 void uart_init(void);
 void uart_poll_tx(void);
-/* True while a received byte waits or the transmit ring holds bytes. */
-bool uart_busy(void);
-void UART_RX_Handler(void);
 extern const vs_link_t uart_link;
 
 /* SysTick: one interrupt per control period; the handler only counts. */

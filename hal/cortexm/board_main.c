@@ -2,8 +2,7 @@
  * plant (loop_hal.h) behind the HAL, console and binary frames on the UART,
  * one vehicle_tick per SysTick period.
  *
- * Between ticks the main loop serves the link and drains the UART, then
- * sleeps (WFI) until the next interrupt: the SysTick or a received byte. A
+ * Between ticks the main loop serves the link and drains the UART. A
  * period that passes while the previous tick or a command still runs is
  * seen by the firmware through now_us (its overrun fault), never silently
  * absorbed.
@@ -99,12 +98,5 @@ int main(void)
 				board_cost.req_worst = c;
 		}
 		uart_poll_tx();
-		/* Sleep unless a period or a byte is already waiting; with
-		 * interrupts held, one that arrives after the test still ends
-		 * the WFI, and is taken right after it. */
-		__asm volatile("cpsid i" ::: "memory");
-		if (systick_count() == done && !uart_busy())
-			__asm volatile("wfi" ::: "memory");
-		__asm volatile("cpsie i" ::: "memory");
 	}
 }

@@ -44,10 +44,9 @@ void PendSV_Handler(void) __attribute__((weak, alias("Default_Handler")));
 
 typedef void (*vector_t)(void);
 
-/* Core exceptions, then the peripheral interrupts up to the UART's receive
- * interrupt (it wakes the main loop; the UART is polled between ticks). */
-__attribute__((section(".isr_vector"),
-	       used)) static const vector_t vectors[16 + BOARD_UART_RX_IRQ + 1] = {
+/* Core exceptions only: the board uses no peripheral interrupt (the UART is
+ * polled between ticks). */
+__attribute__((section(".isr_vector"), used)) static const vector_t vectors[16] = {
     (vector_t)(uintptr_t)&_estack,
     Reset_Handler,
     NMI_Handler,
@@ -64,5 +63,4 @@ __attribute__((section(".isr_vector"),
     0,
     PendSV_Handler,
     SysTick_Handler,
-    [16 + BOARD_UART_RX_IRQ] = UART_RX_Handler,
 };

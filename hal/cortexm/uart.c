@@ -1,7 +1,8 @@
 /* Command link over the CMSDK APB UART, polled. Receive: whatever the data
- * register holds when the main loop asks. Transmit: a ring drained while the
- * transmitter has room, so a reply never stalls the control loop; when the
- * ring is full the rest of a reply is refused and the link layer counts it. */
+ * register holds when the main loop asks. Transmit: a ring the main loop
+ * drains while the transmitter has room, so a reply never stalls the control
+ * loop; when the ring is full the rest of a reply is refused and the link
+ * layer counts it. */
 #include "board.h"
 
 typedef struct {
@@ -15,12 +16,6 @@ typedef struct {
 #define UART	   ((cmsdk_uart_t *)BOARD_UART_BASE)
 #define ST_TX_FULL 1u
 #define ST_RX_FULL 2u
-#define CTRL_TX_EN 1u
-#define CTRL_RX_EN 2u
-#define CTRL_RX_IE 8u
-#define INT_RX	   2u
-
-#define NVIC_ISER0 (*(volatile uint32_t *)0xE000E100u)
 
 #define TX_RING 1024u /* power of two; holds a whole console reply (CONSOLE_REPLY_MAX) */
 
@@ -30,25 +25,19 @@ static uint32_t tx_head, tx_tail; /* free-running; head - tail = bytes queued */
 void uart_init(void)
 {
 	UART->bauddiv = BOARD_CPU_HZ / BOARD_UART_BAUD;
-	/* The receive interrupt only wakes the main loop from its sleep
-	 * (board_main.c); the bytes are still read by polling. */
-	UART->ctrl = CTRL_TX_EN | CTRL_RX_EN | CTRL_RX_IE;
-	NVIC_ISER0 = 1u << BOARD_UART_RX_IRQ;
+	UART->ctrl = 3u;
 }
 
-void UART_RX_Handler(void)
-{
-	UART->intstatus = INT_RX; /* write one to clear */
-}
-
-bool uart_busy(void)
-{
-	return (UART->state & ST_RX_FULL) || tx_head != tx_tail;
-}
+/* At most a FIFO's worth a call: the main loop calls it once a pass, and a
+ * long reply then goes out between ticks, never as one long stretch (a
+ * model whose transmitter is never full, like QEMU's, would otherwise send
+ * a whole reply in one go). */
+#define TX_BURST 16u
 
 void uart_poll_tx(void)
 {
-	while (tx_tail != tx_head && !(UART->state & ST_TX_FULL)) {
+	for (unsigned k = 0; k < TX_BURST && tx_tail != tx_head && !(UART->state & ST_TX_FULL);
+	     k++) {
 		UART->data = tx_ring[tx_tail % TX_RING];
 		tx_tail++;
 	}
@@ -71,7 +60,6 @@ static size_t u_write(void *ctx, const uint8_t *buf, size_t len)
 		tx_ring[tx_head % TX_RING] = buf[n++];
 		tx_head++;
 	}
-	uart_poll_tx();
 	return n;
 }
 
