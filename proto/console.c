@@ -283,8 +283,10 @@ static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_
 	if (np_streq_nocase(cmd, "$help")) {
 		if (ntok == 1) {
 			rb_puts(r, "ok");
-			for (unsigned i = 0; i < CMD_COUNT; i++)
-				rb_printf(r, " %s", cmd_table[i].name);
+			for (unsigned i = 0; i < CMD_COUNT; i++) {
+				rb_puts(r, " ");
+				rb_puts(r, cmd_table[i].name);
+			}
 			return true;
 		}
 		if (ntok == 2) {
