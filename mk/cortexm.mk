@@ -9,8 +9,8 @@
 #   ARM_PREFIX=             toolchain prefix (default arm-none-eabi-)
 #
 # `make check` also runs the self-test of that floating-point check, and
-# (unless QEMU=0) builds both images, the M4 against its budget, for
-# tests/mcu/run_mcu.sh to boot them in QEMU.
+# (unless QEMU=0) builds both images, the M4 against its budget, and the M4
+# tick benchmark, for tests/mcu/run_mcu.sh to run them in QEMU.
 
 ARM_PREFIX ?= arm-none-eabi-
 ARM_CC := $(ARM_PREFIX)gcc
@@ -129,7 +129,8 @@ check: nofloat-selftest
 
 .PHONY: mcu-images
 mcu-images:
-	$(Q)$(MAKE) --no-print-directory TARGET=cortex-m4 BUILD=$(BUILD) cortexm
+	$(Q)$(MAKE) --no-print-directory TARGET=cortex-m4 BUILD=$(BUILD) cortexm \
+		$(BUILD)/cortex-m4/bench.elf
 	$(Q)$(MAKE) --no-print-directory TARGET=cortex-m0 BUILD=$(BUILD) $(BUILD)/cortex-m0/vehicle.elf
 
 ifneq ($(QEMU),0)

@@ -24,6 +24,8 @@
  * wait in a ring and go out from uart_poll_tx). */
 void uart_init(void);
 void uart_poll_tx(void);
+/* Bytes still waiting in the transmit ring. */
+size_t uart_tx_pending(void);
 extern const vs_link_t uart_link;
 
 /* SysTick: one interrupt per control period; the handler only counts. */

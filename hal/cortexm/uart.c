@@ -43,6 +43,11 @@ void uart_poll_tx(void)
 	}
 }
 
+size_t uart_tx_pending(void)
+{
+	return tx_head - tx_tail;
+}
+
 static size_t u_read(void *ctx, uint8_t *buf, size_t max)
 {
 	(void)ctx;

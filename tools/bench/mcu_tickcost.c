@@ -63,6 +63,8 @@ int _write(int fd, const char *buf, int n)
 		k += (int)uart_link.write(NULL, (const uint8_t *)buf + k, (size_t)(n - k));
 		uart_poll_tx();
 	}
+	while (uart_tx_pending())
+		uart_poll_tx();
 	return n;
 }
 
