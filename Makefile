@@ -106,10 +106,11 @@ $(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(TEST_SUPPORT_LIB) $(HOST_LIBS)
 run: $(BUILD)/vehicle-sim
 	$(BUILD)/vehicle-sim --config config/vehicle.xml --io config/io.xml --realtime
 
-# Suites that boot a Debian kernel under QEMU (real SocketCAN, GPIO, uinput);
-# QEMU=0 leaves them out for a quick local run.
+# Suites under QEMU: a Debian kernel (real SocketCAN, GPIO, uinput) and the
+# Cortex-M images on emulated boards (mk/cortexm.mk builds them); QEMU=0
+# leaves them out for a quick local run.
 CHECK_SUITES := tests/run_python_tests.sh \
-	$(if $(filter 0,$(QEMU)),,tests/run_qemu_tests.sh tests/qemu/run_fw.sh)
+	$(if $(filter 0,$(QEMU)),,tests/run_qemu_tests.sh tests/qemu/run_fw.sh tests/mcu/run_mcu.sh)
 
 # Test programs that start vehicle-fw and its peers run in the QEMU guest on
 # an instruction-counted clock (tests/qemu/fw_process.sh), not on the host.

@@ -1,7 +1,8 @@
 # Performance benchmarks (included from the top Makefile).
 #
 #   make bench              every figure of docs/performance.md: tick cost
-#                           (callgrind), accuracy against the double reference,
+#                           (callgrind; and on the Cortex-M4 image in QEMU
+#                           with -icount), accuracy against the double reference,
 #                           console/frame parse rates, 1 kHz loop lateness (60 s)
 #   make bench BENCH_QUICK=1  the same with a 5 s lateness run
 #
@@ -12,7 +13,8 @@ BENCH_SECS := $(if $(filter 1,$(BENCH_QUICK)),5,60)
 BENCH_RIG := $(call objs,tools/bench/rig.c hal/cortexm/loop_hal.c)
 BENCH_PROGS := $(addprefix $(BENCH_DIR)/,tickcost accuracy parserate looplat)
 
-$(BENCH_DIR)/tickcost: $(call objs,tools/bench/tickcost.c) $(BENCH_RIG) $(FW_LIB)
+$(BENCH_DIR)/tickcost: $(call objs,tools/bench/tickcost.c tools/bench/scenario.c) $(BENCH_RIG) \
+	$(FW_LIB)
 $(BENCH_DIR)/looplat: $(call objs,tools/bench/looplat.c) $(BENCH_RIG) $(FW_LIB)
 $(BENCH_DIR)/accuracy: $(call objs,tools/bench/accuracy.c tools/ref/ref_motion.c) $(BENCH_RIG) \
 	$(FW_LIB)
@@ -23,5 +25,10 @@ $(BENCH_PROGS):
 	@$(if $(Q),echo "  LD      $@")
 	$(Q)$(CC) $(LDFLAGS) -o $@ $^ $(LDLIBS_HOST)
 
-bench: $(BENCH_PROGS) $(BUILD)/linkbench
+# The same scenarios on the Cortex-M4 image in QEMU (tools/bench/mcu_tickcost.sh).
+.PHONY: bench-mcu-image
+bench-mcu-image:
+	$(Q)$(MAKE) --no-print-directory TARGET=cortex-m4 BUILD=$(BUILD) $(BUILD)/cortex-m4/bench.elf
+
+bench: $(BENCH_PROGS) $(BUILD)/linkbench bench-mcu-image
 	$(Q)CC="$(CC)" OPT="$(OPT)" tools/bench/bench.sh $(BENCH_DIR) $(BENCH_SECS)

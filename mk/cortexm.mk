@@ -8,7 +8,9 @@
 #                           objects reference any floating-point helper
 #   ARM_PREFIX=             toolchain prefix (default arm-none-eabi-)
 #
-# `make check` also runs the self-test of that floating-point check.
+# `make check` also runs the self-test of that floating-point check, and
+# (unless QEMU=0) builds both images, the M4 against its budget, and the M4
+# tick benchmark, for tests/mcu/run_mcu.sh to run them in QEMU.
 
 ARM_PREFIX ?= arm-none-eabi-
 ARM_CC := $(ARM_PREFIX)gcc
@@ -65,6 +67,17 @@ $(MCU)/vehicle.elf: $(call mcu_objs,$(MCU_BOARD_SRC)) $(MCU)/libproto.a $(MCU)/l
 		-Wl,--gc-sections -Wl,-Map=$(MCU)/vehicle.map -T hal/cortexm/$(TARGET).ld \
 		-o $@ $(filter %.o %.a,$^) -lm -lc -lnosys -lgcc
 
+# The tick-cost benchmark for QEMU's mps2-an386 (make bench, tools/bench/
+# mcu_tickcost.sh): the host's scenarios on the same libraries and board code.
+MCU_CFLAGS_tools := $(MCU_BASE)
+MCU_BENCH_SRC := $(addprefix tools/bench/,mcu_tickcost.c scenario.c rig.c) \
+	$(addprefix hal/cortexm/,startup.c systick.c uart.c loop_hal.c)
+$(MCU)/bench.elf: $(call mcu_objs,$(MCU_BENCH_SRC)) $(MCU)/libfirmware.a hal/cortexm/$(TARGET).ld
+	@$(if $(Q),echo "  LD      $@")
+	$(Q)$(ARM_CC) $(MCU_CPU_$(TARGET)) -Os -nostartfiles --specs=nano.specs \
+		-Wl,--gc-sections -T hal/cortexm/$(TARGET).ld \
+		-o $@ $(filter %.o %.a,$^) -lm -lc -lnosys -lgcc
+
 # Tick path: every firmware object but the double boundary.
 MCU_TICK_OBJS := $(call mcu_objs,$(filter-out $(FW_FLOAT_OK),$(FW_SRC)))
 
@@ -113,3 +126,13 @@ nofloat-selftest:
 	$(Q)echo "nofloat self-test: passed (double multiply detected, __aeabi_ldivmod accepted)"
 
 check: nofloat-selftest
+
+.PHONY: mcu-images
+mcu-images:
+	$(Q)$(MAKE) --no-print-directory TARGET=cortex-m4 BUILD=$(BUILD) cortexm \
+		$(BUILD)/cortex-m4/bench.elf
+	$(Q)$(MAKE) --no-print-directory TARGET=cortex-m0 BUILD=$(BUILD) $(BUILD)/cortex-m0/vehicle.elf
+
+ifneq ($(QEMU),0)
+check: mcu-images
+endif

@@ -282,6 +282,7 @@ int canlink_init(canlink_t *c, vehicle_t *v, const canlink_config_t *cfg, canlin
 	c->send_ctx = ctx;
 	canlink_rx_init(&c->rx, c->rx_buf, sizeof(c->rx_buf));
 	c->status_period_us = cfg->status_hz ? 1000000u / cfg->status_hz : 0;
+	(void)cmd_table_crc(); /* now, so that protocol info costs no tick */
 	return 0;
 }
 

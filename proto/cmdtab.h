@@ -77,7 +77,9 @@ const char *cmd_type_idl(char type);
 
 /* CRC-16/CCITT-FALSE, continuing from crc (start with 0xFFFF). */
 uint16_t cmd_crc16(uint16_t crc, const void *data, size_t n);
-/* Checksum of the table (see the header comment). */
+/* Checksum of the table (see the header comment). Computed on the first call
+ * and kept: servers call it at start-up (console_init, canlink_init) so that
+ * no request pays for it. */
 uint16_t cmd_table_crc(void);
 
 /* One decoded argument. Strings and alarms point into the unit or into the

@@ -100,15 +100,23 @@ static bool needs_hex(unsigned char b)
 static void rb_quoted(rbuf_t *r, const char *s)
 {
 	rb_puts(r, "\"");
-	for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
+	for (const unsigned char *p = (const unsigned char *)s; *p;) {
+		const unsigned char *run = p;
+
+		/* Plain bytes in one copy: a byte at a time costs a reply of
+		 * alarm texts thousands of instructions on a microcontroller. */
+		while (*p && *p != '"' && *p != '\\' && !needs_hex(*p))
+			p++;
+		rb_putn(r, (const char *)run, (size_t)(p - run));
+		if (!*p)
+			break;
 		if (*p == '"' || *p == '\\') {
 			char e[2] = {'\\', (char)*p};
 			rb_putn(r, e, 2);
-		} else if (needs_hex(*p)) {
-			rb_printf(r, "\\x%02X", *p);
 		} else {
-			rb_putn(r, (const char *)p, 1);
+			rb_printf(r, "\\x%02X", *p);
 		}
+		p++;
 	}
 	rb_puts(r, "\"");
 }
@@ -275,8 +283,10 @@ static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_
 	if (np_streq_nocase(cmd, "$help")) {
 		if (ntok == 1) {
 			rb_puts(r, "ok");
-			for (unsigned i = 0; i < CMD_COUNT; i++)
-				rb_printf(r, " %s", cmd_table[i].name);
+			for (unsigned i = 0; i < CMD_COUNT; i++) {
+				rb_puts(r, " ");
+				rb_puts(r, cmd_table[i].name);
+			}
 			return true;
 		}
 		if (ntok == 2) {
@@ -472,6 +482,7 @@ void console_init(console_t *c, vehicle_t *v, console_write_fn write, void *wctx
 	c->v = v;
 	c->write = write;
 	c->wctx = wctx;
+	(void)cmd_table_crc(); /* now, so that $version and protocol info cost no tick */
 }
 
 void console_set_extra(console_t *c, console_extra_fn fn, void *ctx)

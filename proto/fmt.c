@@ -2,6 +2,7 @@
 #include "fmt.h"
 
 #include <stdbool.h>
+#include <stdint.h>
 
 typedef struct {
 	char *buf;
@@ -28,11 +29,19 @@ static void put_num(out_t *o, unsigned long long v, bool neg, unsigned base, uns
 {
 	char tmp[20]; /* 2^64 - 1 has 20 decimal digits */
 	size_t k = 0;
+	uint32_t w;
 
-	do {
+	/* 64-bit division is a library call on a 32-bit core (about 100
+	 * instructions a digit on a Cortex-M): only for the digits above 2^32. */
+	while (v > UINT32_MAX) {
 		tmp[k++] = "0123456789ABCDEF"[v % base];
 		v /= base;
-	} while (v);
+	}
+	w = (uint32_t)v;
+	do {
+		tmp[k++] = "0123456789ABCDEF"[w % base];
+		w /= base;
+	} while (w);
 	if (!zero)
 		pad(o, ' ', width, k + (neg ? 1u : 0u));
 	if (neg)

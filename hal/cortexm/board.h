@@ -24,11 +24,17 @@
  * wait in a ring and go out from uart_poll_tx). */
 void uart_init(void);
 void uart_poll_tx(void);
+/* Bytes still waiting in the transmit ring. */
+size_t uart_tx_pending(void);
 extern const vs_link_t uart_link;
 
 /* SysTick: one interrupt per control period; the handler only counts. */
 void systick_init(uint32_t tick_hz);
 uint32_t systick_count(void);
+/* Processor cycles since systick_init, modulo 2^32 (periods and the
+ * counter's position in the current one): the cost of a piece of code is
+ * the difference of two readings. */
+uint32_t systick_cycles(void);
 void SysTick_Handler(void);
 
 #endif

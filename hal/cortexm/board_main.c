@@ -18,6 +18,16 @@ static vehicle_t unit;
 static console_t con;
 static link_t lnk;
 
+/* What the tick and the requests cost, in processor cycles (systick_cycles):
+ * read from outside, through a debugger or QEMU's monitor (tests/mcu,
+ * docs/mcu.md). A request is counted in the link poll that completed it. */
+typedef struct {
+	uint32_t ticks, tick_last, tick_worst;
+	uint64_t tick_sum;
+	uint32_t requests, req_last, req_worst;
+} board_cost_t;
+volatile board_cost_t board_cost;
+
 /* The configuration lives on the stack only while vehicle_init copies it:
  * 1.2 KiB of RAM that is not held for good. */
 static __attribute__((noinline)) uint32_t unit_init(void)
@@ -33,6 +43,24 @@ static __attribute__((noinline)) uint32_t unit_init(void)
 	return cfg.tick_hz;
 }
 
+/* The link, one received byte at a time, until a request has run or the
+ * next period has begun: however many requests a host sends at once, a tick
+ * waits for one of them at most. Unread bytes wait in the UART (a port
+ * whose receiver can overrun buffers them by interrupt or DMA, see
+ * docs/mcu.md). Returns the requests completed so far. */
+static uint32_t serve_link(uint32_t done, uint32_t now_ms, uint32_t seen)
+{
+	uint8_t b;
+	uint32_t r = seen;
+
+	while (r == seen && systick_count() == done && uart_link.read(NULL, &b, 1) == 1) {
+		link_feed(&lnk, &b, 1, now_ms);
+		r = con.lines + lnk.fs.rx.st.frames;
+	}
+	frame_srv_poll(&lnk.fs, now_ms); /* the frame inter-byte timeout */
+	return r;
+}
+
 int main(void)
 {
 	uint32_t tick_hz = unit_init();
@@ -43,17 +71,32 @@ int main(void)
 
 	uint32_t done = systick_count();
 	uint32_t period_us = 1000000u / tick_hz;
+	uint32_t seen = 0; /* requests completed so far: console lines and frames */
 	for (;;) {
-		uint32_t now = systick_count();
+		uint32_t now = systick_count(), t0 = systick_cycles(), c, r;
 		if (now != done) {
 			/* Late by several periods: the clock jumps, and the firmware
 			 * sees it. */
 			done = now;
 			vehicle_tick(&unit, done * period_us);
+			c = systick_cycles() - t0;
+			board_cost.ticks++;
+			board_cost.tick_last = c;
+			board_cost.tick_sum += c;
+			if (c > board_cost.tick_worst)
+				board_cost.tick_worst = c;
 			loop_hal_step(&plant);
 			continue;
 		}
-		link_poll(&lnk, done * period_us / 1000u);
+		r = serve_link(done, done * period_us / 1000u, seen);
+		if (r != seen) {
+			c = systick_cycles() - t0;
+			seen = r;
+			board_cost.requests++;
+			board_cost.req_last = c;
+			if (c > board_cost.req_worst)
+				board_cost.req_worst = c;
+		}
 		uart_poll_tx();
 	}
 }

@@ -3,15 +3,19 @@
  * contexts at once. */
 #include "board.h"
 
-#define SYST_CSR (*(volatile uint32_t *)0xE000E010u)
-#define SYST_RVR (*(volatile uint32_t *)0xE000E014u)
-#define SYST_CVR (*(volatile uint32_t *)0xE000E018u)
+#define SYST_CSR       (*(volatile uint32_t *)0xE000E010u)
+#define SYST_RVR       (*(volatile uint32_t *)0xE000E014u)
+#define SYST_CVR       (*(volatile uint32_t *)0xE000E018u)
+#define SCB_ICSR       (*(volatile uint32_t *)0xE000ED04u)
+#define ICSR_PENDSTSET (1u << 26)
 
 static volatile uint32_t periods;
+static uint32_t period_cycles;
 
 void systick_init(uint32_t tick_hz)
 {
-	SYST_RVR = BOARD_CPU_HZ / tick_hz - 1u;
+	period_cycles = BOARD_CPU_HZ / tick_hz;
+	SYST_RVR = period_cycles - 1u;
 	SYST_CVR = 0;
 	SYST_CSR = 7u; /* processor clock, interrupt, enable */
 }
@@ -19,6 +23,23 @@ void systick_init(uint32_t tick_hz)
 uint32_t systick_count(void)
 {
 	return periods;
+}
+
+uint32_t systick_cycles(void)
+{
+	uint32_t primask, p, v;
+
+	/* With interrupts held, a wrap not yet counted by the handler shows as
+	 * PENDSTSET: count it here, and read the counter again after it. */
+	__asm volatile("mrs %0, primask\n\tcpsid i" : "=r"(primask)::"memory");
+	p = periods;
+	v = SYST_CVR;
+	if (SCB_ICSR & ICSR_PENDSTSET) {
+		p++;
+		v = SYST_CVR;
+	}
+	__asm volatile("msr primask, %0" ::"r"(primask) : "memory");
+	return p * period_cycles + (period_cycles - 1u - v);
 }
 
 void SysTick_Handler(void)

@@ -1,7 +1,8 @@
 /* Command link over the CMSDK APB UART, polled. Receive: whatever the data
- * register holds when the main loop asks. Transmit: a ring drained while the
- * transmitter has room, so a reply never stalls the control loop; when the
- * ring is full the rest of a reply is refused and the link layer counts it. */
+ * register holds when the main loop asks. Transmit: a ring the main loop
+ * drains while the transmitter has room, so a reply never stalls the control
+ * loop; when the ring is full the rest of a reply is refused and the link
+ * layer counts it. */
 #include "board.h"
 
 typedef struct {
@@ -27,12 +28,24 @@ void uart_init(void)
 	UART->ctrl = 3u;
 }
 
+/* At most a FIFO's worth a call: the main loop calls it once a pass, and a
+ * long reply then goes out between ticks, never as one long stretch (a
+ * model whose transmitter is never full, like QEMU's, would otherwise send
+ * a whole reply in one go). */
+#define TX_BURST 16u
+
 void uart_poll_tx(void)
 {
-	while (tx_tail != tx_head && !(UART->state & ST_TX_FULL)) {
+	for (unsigned k = 0; k < TX_BURST && tx_tail != tx_head && !(UART->state & ST_TX_FULL);
+	     k++) {
 		UART->data = tx_ring[tx_tail % TX_RING];
 		tx_tail++;
 	}
+}
+
+size_t uart_tx_pending(void)
+{
+	return tx_head - tx_tail;
 }
 
 static size_t u_read(void *ctx, uint8_t *buf, size_t max)
@@ -52,7 +65,6 @@ static size_t u_write(void *ctx, const uint8_t *buf, size_t len)
 		tx_ring[tx_head % TX_RING] = buf[n++];
 		tx_head++;
 	}
-	uart_poll_tx();
 	return n;
 }
 

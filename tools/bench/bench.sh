@@ -28,6 +28,12 @@ awk '
 	END { if (t != "") printf "  target: <= 5000 for the retarget tick (call + tick, worst): %d -> %s\n", c + t, (c + t <= 5000 ? "met" : "missed") }' "$dir/tickcost.txt"
 echo
 
+echo "== 1b. the same ticks on a Cortex-M4: instructions per whole vehicle_tick (arm-none-eabi-gcc -Os, QEMU mps2-an386, =="
+echo "  -icount shift=6: one instruction = 64 ns of the board's 25 MHz SysTick, counted around each call; shares of the"
+echo "  period at one cycle per instruction (an M4 takes 1 for most, 2 for loads, up to 4 for taken branches)"
+"$here/mcu_tickcost.sh" "$(dirname "$dir")/cortex-m4/bench.elf" | tee "$dir/mcu_tickcost.txt"
+echo
+
 echo "== 2. trajectory accuracy: fixed-point engine (motion_tick, perfect plant) vs double reference (tools/ref) =="
 "$here/accuracy.sh" "$dir/accuracy" | tee "$dir/accuracy.txt"
 awk '

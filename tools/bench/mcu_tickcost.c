@@ -1,0 +1,101 @@
+/* Control tick cost on a Cortex-M4, for QEMU's mps2-an386 board run with
+ * -icount (tools/bench/mcu_tickcost.sh): the scenarios of scenario.h on the
+ * loopback plant, each measured call timed by systick_cycles (the 25 MHz
+ * SysTick), then one line per scenario and label on the UART:
+ *   SCENARIO LABEL calls SUM MIN MAX      (cycles of the 25 MHz clock)
+ * and a semihosting exit. Under -icount shift=N every instruction takes
+ * 2^N ns, so cycles * 40 / 2^N are instructions.
+ */
+#include <stdio.h>
+#include <string.h>
+
+#include "hal/cortexm/board.h"
+#include "scenario.h"
+
+typedef struct {
+	const char *label;
+	uint32_t n, min, max;
+	uint64_t sum;
+} stat_t;
+
+static stat_t stats[3];
+static rig_t rig;
+
+static void add(const char *label, uint32_t c)
+{
+	for (unsigned i = 0; i < sizeof(stats) / sizeof(stats[0]); i++) {
+		stat_t *s = &stats[i];
+		if (s->label && strcmp(s->label, label) != 0)
+			continue;
+		if (!s->label)
+			*s = (stat_t){label, 0, UINT32_MAX, 0, 0};
+		s->n++;
+		s->sum += c;
+		if (c < s->min)
+			s->min = c;
+		if (c > s->max)
+			s->max = c;
+		return;
+	}
+}
+
+static void tick(rig_t *r, const char *label)
+{
+	uint32_t t0 = systick_cycles();
+	rig_tick_firmware(r);
+	add(label, systick_cycles() - t0);
+}
+
+static bool retarget(rig_t *r, vs_position_t p, const char *label)
+{
+	uint32_t t0 = systick_cycles();
+	bool ok = vs_moveContinuousRel(&r->v, p);
+	add(label, systick_cycles() - t0);
+	return ok;
+}
+
+/* newlib's output: blocking, straight to the UART. */
+int _write(int fd, const char *buf, int n);
+int _write(int fd, const char *buf, int n)
+{
+	(void)fd;
+	for (int k = 0; k < n;) {
+		k += (int)uart_link.write(NULL, (const uint8_t *)buf + k, (size_t)(n - k));
+		uart_poll_tx();
+	}
+	while (uart_tx_pending())
+		uart_poll_tx();
+	return n;
+}
+
+/* ARM semihosting SYS_EXIT: QEMU (-semihosting) ends with status 0 for
+ * ADP_Stopped_ApplicationExit, 1 otherwise. */
+void _exit(int code);
+void _exit(int code)
+{
+	register uint32_t r0 __asm("r0") = 0x18u;
+	register uint32_t r1 __asm("r1") = code == 0 ? 0x20026u : 0x20023u;
+	for (;;)
+		__asm volatile("bkpt 0xab" ::"r"(r0), "r"(r1) : "memory");
+}
+
+int main(void)
+{
+	static const bench_hooks_t hooks = {tick, retarget};
+	static const char *const names[] = {"idle", "line", "cruise", "jog", "retarget"};
+
+	uart_init();
+	systick_init(1000u);
+	for (unsigned k = 0; k < sizeof(names) / sizeof(names[0]); k++) {
+		memset(stats, 0, sizeof(stats));
+		rig_init(&rig);
+		if (bench_scenario(&rig, names[k], &hooks) < 0)
+			_exit(1);
+		for (unsigned i = 0; i < sizeof(stats) / sizeof(stats[0]) && stats[i].label; i++)
+			printf("%s %s %lu %lu %lu %lu\n", names[k], stats[i].label,
+			       (unsigned long)stats[i].n, (unsigned long)stats[i].sum,
+			       (unsigned long)stats[i].min, (unsigned long)stats[i].max);
+	}
+	fflush(stdout);
+	_exit(0);
+}

@@ -1,0 +1,65 @@
+/* Tick-cost scenarios (see scenario.h). */
+#include "scenario.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static void need(bool ok, const char *what)
+{
+	if (!ok) {
+		fprintf(stderr, "tickcost: %s refused\n", what);
+		exit(2);
+	}
+}
+
+static long measured;
+
+static void tick(rig_t *r, const bench_hooks_t *h, const char *label)
+{
+	h->tick(r, label);
+	loop_hal_step(&r->plant);
+	measured++;
+}
+
+long bench_scenario(rig_t *r, const char *sc, const bench_hooks_t *h)
+{
+	measured = 0;
+	if (strcmp(sc, "idle") == 0) {
+		for (int i = 0; i < 2000; i++)
+			tick(r, h, "tick");
+	} else if (strcmp(sc, "line") == 0) {
+		need(vs_moveForward(&r->v, 2000.0), "moveForward");
+		do
+			tick(r, h, "tick");
+		while (motion_has_work(&r->v.motion));
+	} else if (strcmp(sc, "cruise") == 0) {
+		for (int i = 0; i < ROUTE_N; i++)
+			need(vs_moveCruiseAbs(&r->v, (vs_point_t){route_mm[i][0], route_mm[i][1]}),
+			     "moveCruiseAbs");
+		do
+			tick(r, h, "tick");
+		while (motion_has_work(&r->v.motion));
+	} else if (strcmp(sc, "jog") == 0) {
+		for (int i = 0; i < 3000; i++) {
+			if (i % 100 == 0)
+				need(vs_moveJog(&r->v, 300.0, 0.0, 30.0), "moveJog");
+			tick(r, h, "tick");
+		}
+	} else if (strcmp(sc, "retarget") == 0) {
+		need(vs_moveContinuousRel(&r->v, (vs_position_t){3000.0, 0.0, 0.0}),
+		     "moveContinuousRel");
+		for (int k = 0; k < 20; k++) {
+			for (int i = 0; i < 250; i++)
+				rig_tick(r);
+			/* Alternate left and right goals ahead: a new bearing each time. */
+			double side = (k & 1) ? -400.0 : 400.0;
+			need(h->retarget(r, (vs_position_t){1500.0, side, side / 20.0}, "cmd"),
+			     "moveContinuousRel");
+			tick(r, h, "tick-after-cmd");
+		}
+	} else {
+		return -1;
+	}
+	return measured;
+}

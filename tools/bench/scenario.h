@@ -1,0 +1,31 @@
+/* The tick-cost scenarios, shared by the host benchmark (tickcost.c, counted
+ * by callgrind) and the Cortex-M4 one (mcu_tickcost.c, counted by SysTick in
+ * QEMU), so that both measure the same ticks.
+ *
+ * Scenarios (reference configuration: 1 kHz, 500 mm/s, 500 mm/s^2):
+ *   idle      powered, servo on, nothing to do, 2000 ticks
+ *   line      moveForward 2000: every tick until idle
+ *   cruise    the 10-waypoint moveCruiseAbs route (rig.c): every tick until idle
+ *   jog       moveJog 300 mm/s, 30 deg/s, re-sent every 100 ms: 3000 ticks
+ *   retarget  moveContinuousRel while moving, 20 times: the call and the tick after it
+ */
+#ifndef BENCH_SCENARIO_H
+#define BENCH_SCENARIO_H
+
+#include "rig.h"
+
+typedef struct {
+	/* Runs rig_tick_firmware(r) once and measures it; the plant steps
+	 * afterwards, outside the measurement. */
+	void (*tick)(rig_t *r, const char *label);
+	/* Runs vs_moveContinuousRel(&r->v, p) and measures it as label. */
+	bool (*retarget)(rig_t *r, vs_position_t p, const char *label);
+} bench_hooks_t;
+
+#define BENCH_SCENARIOS "idle line cruise jog retarget"
+
+/* Runs one scenario on a rig fresh from rig_init. Returns the measured
+ * ticks, or -1 for an unknown name; exits when an operation is refused. */
+long bench_scenario(rig_t *r, const char *name, const bench_hooks_t *h);
+
+#endif
