@@ -967,6 +967,10 @@ static void path_tick(motion_t *m, fx_twist_t *out)
 				break;
 			}
 			if (!next_piece(m)) {
+				/* A stage skipped as too short may have set up its
+				 * piece: none is left, or the next command would run
+				 * it (as the end of its own line). */
+				m->seg.kind = SEG_NONE;
 				pop(m);
 				continue;
 			}

@@ -540,6 +540,34 @@ static void test_set_pose_during_arc(void **state)
 	assert_true(fabs(d(r.m.ref.th_deg) - (-45.0 + 90.0 - swept)) < 1e-6);
 }
 
+/* A command with no piece (a forward of zero) in front of a cruise route
+ * leaves nothing behind: the route starts along its first line from rest
+ * (fuzz_ops finding: the empty line was taken for the route's first line,
+ * which jumped straight into the first corner). */
+static void test_empty_command_before_cruise(void **state)
+{
+	(void)state;
+	rig_t r;
+	rig_init(&r, MOTION_KIN_DIFF);
+	assert_true(motion_forward(&r.m, 0));
+	assert_true(motion_cruise_abs(&r.m, q(1000), 0));
+	assert_true(motion_cruise_abs(&r.m, q(2000), q(1000)));
+	rig_tick(&r);
+	/* first tick: one step of the set acceleration (500 mm/s^2), straight */
+	assert_true(fabs(r.vx - 0.5) < 1e-6);
+	assert_true(r.w == 0.0);
+	/* the first line runs straight up to its corner entry (800 mm) */
+	while (d(r.m.ref.x_mm) < 790.0 && r.ticks < 10000) {
+		rig_tick(&r);
+		assert_int_equal(r.m.ref.y_mm, 0);
+		assert_true(r.w == 0.0);
+	}
+	run_until_idle(&r, 30000);
+	assert_int_equal(r.m.ref.x_mm, q(2000));
+	assert_int_equal(r.m.ref.y_mm, q(1000));
+	assert_true(r.ax_max <= 500.0 + 1e-3);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -559,6 +587,7 @@ int main(void)
 	    cmocka_unit_test(test_limits_change_mid_piece),
 	    cmocka_unit_test(test_accel_lowered_while_paused),
 	    cmocka_unit_test(test_rot_accel_lowered_while_paused),
+	    cmocka_unit_test(test_empty_command_before_cruise),
 	};
 	return cmocka_run_group_tests_name("motion", tests, NULL, NULL);
 }

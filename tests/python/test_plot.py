@@ -10,16 +10,15 @@ import unittest
 
 from simrig import BUILD, TOP
 
-SCRIPT = """setPower true
-setServo true
-setVelocity 300 60
-moveForward 600
-$wait 4000
-moveTurn 90
-$wait 3000
-moveCruiseAbs 600 400
-$wait 4000
-"""
+
+def polled(ms):
+    """A host that waits ms while polling getState every 500 ms, as the link
+    watchdog (1 s in config/vehicle.xml) expects of it."""
+    return "$wait 500\ngetState\n" * (ms // 500)
+
+
+SCRIPT = ("setPower true\nsetServo true\nsetVelocity 300 60\nmoveForward 600\n" + polled(4000) +
+          "moveTurn 90\n" + polled(3000) + "moveCruiseAbs 600 400\n" + polled(4000))
 
 
 def trace(tmp):
