@@ -84,6 +84,7 @@ t0=$(date +%s)
 run can_link.sh "${common[@]}"
 run can_peers.sh "${common[@]}" "$here/qemu/can_python.py" "$here/qemu/can_vs.py" "${pyfiles[@]}"
 run can_isotp.sh "${common[@]}"
+run can_watchdog.sh "${common[@]}"
 echo "qemu: guests took $(($(date +%s) - t0)) s"
 [ -n "$failed_names" ] && echo "qemu: FAILED:$failed_names"
 summary "$passed" "$failed"

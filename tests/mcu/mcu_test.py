@@ -138,12 +138,18 @@ class Board:
         return self.costs()["ticks"]
 
     def wait(self, ms):
-        """Lets ms of the unit's time pass (the simulator's $wait)."""
+        """Lets ms of the unit's time pass (the simulator's $wait), sending
+        getState every 500 ms of it as a host does: the link watchdog
+        (1 s in the board's configuration) stops motion on a silent link."""
         end = self.now() + ms
+        fed = self.now()
         while True:
             now = self.now()
             if now >= end:
                 return
+            if now - fed >= 500:
+                assert self.ex("getState").startswith("ok true "), "keep-alive"
+                fed = now
             # Host time only paces the polling; the unit's clock decides.
             time.sleep(min(0.05, (end - now) / 4000.0))
 
