@@ -56,7 +56,7 @@ enum {
 	ALM_F_POWER_LOST = 206,	   /* main power dropped while on */
 	ALM_F_BATTERY_CRITICAL = 207,
 	ALM_F_ESTOP = 208,
-	ALM_F_OVERRUN = 209, /* the loop's own work took longer than a period */
+	ALM_F_OVERRUN = 209,	/* the loop's own work took longer than a period */
 	ALM_F_LOOP_STALL = 210, /* a tick came later than loop_late_ms */
 };
 

@@ -323,7 +323,9 @@ static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_
 
 			memset(&d, 0, sizeof(d));
 			vehicle_diag(c->v, &d);
-			rb_printf(r, "ok ticks %lu overruns %lu late %lu max_late_us %lu mode %s queue %u ref",
+			rb_printf(r,
+				  "ok ticks %lu overruns %lu late %lu max_late_us %lu mode %s "
+				  "queue %u ref",
 				  (unsigned long)d.ticks, (unsigned long)d.overruns,
 				  (unsigned long)d.late_ticks, (unsigned long)d.max_late_us,
 				  mode_name(d.mode), (unsigned)d.queue_len);

@@ -717,11 +717,13 @@ static void test_version_and_diag(void **state)
 	EXPECT("$version", "ok firmware \"Ver.1.0.0\" interface \"RTC VehicleService interface: "
 			   "ver.2.0.0\" protocol 1 table 0x1F09");
 	EXPECT("$version x", "error 2 $version takes 0 arguments, got 1");
-	EXPECT("$diag", "ok ticks 0 overruns 0 late 0 max_late_us 0 mode idle queue 0 ref 0.000 0.000 0.000 "
-			"odom 0.000 0.000 0.000");
+	EXPECT("$diag",
+	       "ok ticks 0 overruns 0 late 0 max_late_us 0 mode idle queue 0 ref 0.000 0.000 0.000 "
+	       "odom 0.000 0.000 0.000");
 	EXPECT("setPosition 10 -20 45", "ok true");
 	fake_run(&fh, &veh, 25);
-	EXPECT("$DIAG", "ok ticks 25 overruns 0 late 0 max_late_us 0 mode idle queue 0 ref 10.000 -20.000 45.000 "
+	EXPECT("$DIAG", "ok ticks 25 overruns 0 late 0 max_late_us 0 mode idle queue 0 ref 10.000 "
+			"-20.000 45.000 "
 			"odom 10.000 -20.000 45.000");
 	EXPECT("$diag 1", "error 2 $diag takes 0 arguments, got 1");
 	/* extras never raise alarms */

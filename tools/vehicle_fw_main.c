@@ -393,9 +393,8 @@ int main(int argc, char **argv)
 	rt_log(LOG_INFO,
 	       "exit: %llu ticks, %llu late wake-ups (max %u us), %llu periods skipped, "
 	       "busiest period %u us, %u firmware overruns",
-	       (unsigned long long)a->st.ticks, (unsigned long long)a->st.late,
-	       a->st.max_late_us, (unsigned long long)a->st.skipped, a->st.busy_max_us,
-	       d.overruns);
+	       (unsigned long long)a->st.ticks, (unsigned long long)a->st.late, a->st.max_late_us,
+	       (unsigned long long)a->st.skipped, a->st.busy_max_us, d.overruns);
 	if (bk.battery_source != BK_BATTERY_FIXED)
 		rt_log(LOG_INFO, "exit: %u failed battery reads", a->hal.battery_errors);
 	for (unsigned b = 0; b < BK_CANOPEN_BUSES; b++)
