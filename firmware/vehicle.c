@@ -512,6 +512,19 @@ void vehicle_link_heard(vehicle_t *v, vs_link_id_t link)
 	v->link_silent_ticks = 0;
 }
 
+uint32_t vehicle_link_timeout(const vehicle_t *v)
+{
+	return v->cfg.link_timeout_ms;
+}
+
+void vehicle_set_link_timeout(vehicle_t *v, uint32_t ms)
+{
+	v->cfg.link_timeout_ms = ms;
+	/* ms * tick_hz / 1000, rounded up: at least one tick when on. */
+	v->link_timeout_ticks = (uint32_t)(((uint64_t)ms * v->cfg.tick_hz + 999u) / 1000u);
+	v->link_silent_ticks = 0;
+}
+
 static COLD void link_lost(vehicle_t *v)
 {
 	static const char *const names[] = {"console", "frames", "CAN"};

@@ -69,6 +69,10 @@ void vehicle_tick_busy(vehicle_t *v, uint32_t busy_us);
 typedef enum { VS_LINK_CONSOLE = 0, VS_LINK_FRAMES = 1, VS_LINK_CAN = 2 } vs_link_id_t;
 /* A valid request arrived on a link: the link watchdog restarts. */
 void vehicle_link_heard(vehicle_t *v, vs_link_id_t link);
+/* The link watchdog's timeout in ms (0 = off), from link_timeout_ms at
+ * init; the set form ($watchdog) restarts the watchdog. */
+uint32_t vehicle_link_timeout(const vehicle_t *v);
+void vehicle_set_link_timeout(vehicle_t *v, uint32_t ms);
 
 /* The operations, in spec order. */
 bool vs_clearAlarm(vehicle_t *v);

@@ -303,6 +303,21 @@ static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_
 		return reply_error(c, r, "%d $help takes 0 or 1 argument, got %u", CONSOLE_E_ARITY,
 				   ntok - 1);
 	}
+	if (np_streq_nocase(cmd, "$watchdog")) {
+		/* The link watchdog's timeout: read, or set for this run (0 =
+		 * off; hands-on bring-up, a lockstep harness). */
+		int64_t ms = 0;
+		if (ntok > 2)
+			return reply_error(c, r, "%d $watchdog takes 0 or 1 argument, got %u",
+					   CONSOLE_E_ARITY, ntok - 1);
+		if (ntok == 2 && np_parse_int(argv[1], 0, 60000, &ms) != NP_OK)
+			return reply_error(c, r, "%d $watchdog: %s is not a time in 0..60000 ms",
+					   CONSOLE_E_RANGE, argv[1]);
+		if (ntok == 2)
+			vehicle_set_link_timeout(c->v, (uint32_t)ms);
+		rb_printf(r, "ok watchdog %lu", (unsigned long)vehicle_link_timeout(c->v));
+		return true;
+	}
 	if (np_streq_nocase(cmd, "$version") || np_streq_nocase(cmd, "$diag")) {
 		if (ntok != 1)
 			return reply_error(c, r, "%d %s takes 0 arguments, got %u", CONSOLE_E_ARITY,

@@ -732,6 +732,33 @@ static void test_link_watchdog_idle_and_paused(void **state)
 	assert_true(fabs(x - 2000.0) < 0.05 && fabs(y) < 0.05 && fabs(th) < 0.01);
 }
 
+/* $watchdog reads and sets the timeout for this run: off, nothing stops a
+ * silent route; 200 ms, the stop begins 200 ticks after the last request. */
+static void test_link_watchdog_console_setting(void **state)
+{
+	(void)state;
+	EXPECT("$watchdog", "ok watchdog 1000");
+	EXPECT("$watchdog 0", "ok watchdog 0");
+	EXPECT("$watchdog 60001", "error 4 $watchdog: 60001 is not a time in 0..60000 ms");
+	EXPECT("$watchdog -1", "error 4 $watchdog: -1 is not a time in 0..60000 ms");
+	EXPECT("$watchdog 1 2", "error 2 $watchdog takes 0 or 1 argument, got 2");
+	EXPECT("$watchdog", "ok watchdog 0");
+	ready();
+	EXPECT("moveForward 2000", "ok true");
+	sim_run_ms(&S, 6000);
+	EXPECT("getActiveAlarm 0", "ok true 0 0");
+	EXPECT("getState", "ok true 16 \"Ready\"");
+	EXPECT("moveForward 2000", "ok true");
+	sim_run_ms(&S, 1500);
+	EXPECT("$watchdog 200", "ok watchdog 200");
+	for (unsigned t = 1; t < 200; t++) {
+		sim_tick(&S);
+		assert_true(fabs(cmd_mm_s() - CRUISE_MM_S) < 1e-6);
+	}
+	assert_in_range(expect_decel(ACC_LIMIT, 2000), 500, 501);
+	EXPECT("getActiveAlarm 1", "ok true 1 1 153 warning \"link lost: console silent 200 ms\"");
+}
+
 /* More path commands than the queue holds: the 33rd and later are refused
  * with false and 125, and the 32 accepted ones all run, in order. */
 static void test_command_flood(void **state)
@@ -817,6 +844,7 @@ int main(void)
 	    T(test_link_loss_during_jog),
 	    cmocka_unit_test_setup(test_link_watchdog_stops_route, setup_watchdog),
 	    cmocka_unit_test_setup(test_link_watchdog_idle_and_paused, setup_watchdog),
+	    cmocka_unit_test_setup(test_link_watchdog_console_setting, setup_watchdog),
 	    T(test_command_flood),
 	    T(test_joystick_lost),
 	};
