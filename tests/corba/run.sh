@@ -9,6 +9,7 @@
 #   5. a unit that does not answer (simulator stopped): TRANSIENT, bounded;
 #      the gateway serves again when it answers
 #   6. the gateway ends on SIGTERM and leaves the naming service clean
+#   7. the 34 operations again with the gateway on the unit's text console
 # Every wait is bounded and polls for its condition; none is a fixed sleep.
 # Usage: tests/corba/run.sh BUILD
 set -u
@@ -100,16 +101,19 @@ ok "omniNames on 127.0.0.1:$ns_port, data in its own folder"
 
 # 3. The simulator in lockstep on a pty; its stdin/stdout on fds 7/8 for the
 # client ('$wait', '$sim', direct console).
-mkfifo "$tmp/sim.in" "$tmp/sim.out"
-"$build/vehicle-sim" --pty --fast --config "$here/config/vehicle.xml" --io "$here/config/io.xml" \
-	<"$tmp/sim.in" >"$tmp/sim.out" 2>"$tmp/sim.log" &
-sim=$!
-pids+=("$sim")
-exec 7>"$tmp/sim.in" 8<"$tmp/sim.out"
-if ! read -r -t 60 -u 8 pty || [ ! -c "$pty" ]; then
-	fail "vehicle-sim --pty --fast did not give its pty"
-	finish
-fi
+start_sim() {
+	mkfifo "$tmp/sim.in" "$tmp/sim.out"
+	"$build/vehicle-sim" --pty --fast --config "$here/config/vehicle.xml" \
+		--io "$here/config/io.xml" <"$tmp/sim.in" >"$tmp/sim.out" 2>"$tmp/sim.log" &
+	sim=$!
+	pids+=("$sim")
+	exec 7>"$tmp/sim.in" 8<"$tmp/sim.out"
+	if ! read -r -t 60 -u 8 pty || [ ! -c "$pty" ]; then
+		fail "vehicle-sim --pty --fast did not give its pty"
+		finish
+	fi
+}
+start_sim
 
 name="test.vehicles/VehicleService.unit"
 # Generous per attempt, so that a busy machine delaying the simulator is a
@@ -117,7 +121,7 @@ name="test.vehicles/VehicleService.unit"
 gw_timeout=1500
 gw_retries=3
 start_gateway() {
-	"$build/vehicle-corba" --port "$pty" --timeout $gw_timeout --retries $gw_retries \
+	"$build/vehicle-corba" --port "$pty" "$@" --timeout $gw_timeout --retries $gw_retries \
 		--name "$name" --ior \
 		-ORBInitRef "NameService=corbaname::127.0.0.1:$ns_port" \
 		-ORBendPoint giop:tcp:127.0.0.1: >"$tmp/ior" 2>"$tmp/gw.log" &
@@ -156,5 +160,20 @@ else
 	fail "vehicle-corba still running 60 s after SIGTERM"
 fi
 run_client --unbound --name "$name"
+
+# 7. The same 34 operations with the gateway on the unit's text console
+# (a fresh simulator; doubles come back with the console's three decimals).
+exec 7>&- 8<&-
+wait "$sim"
+rm -f "$tmp/sim.in" "$tmp/sim.out" "$tmp/ior"
+start_sim
+name="test.vehicles/VehicleService.console"
+start_gateway --console
+if wait_for 60 grep -q '^IOR:' "$tmp/ior"; then
+	run_client --all 7 8 --console-link --name "$name"
+else
+	fail "vehicle-corba --console printed no IOR"
+	cat "$tmp/gw.log"
+fi
 
 finish

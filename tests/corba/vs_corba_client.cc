@@ -11,6 +11,8 @@
 //     --silent MIN_MS  getState must raise TRANSIENT (COMPLETED_MAYBE) after at
 //                      least MIN_MS and within 30 s: the unit does not answer
 //     --unbound        NAME must no longer resolve
+//   --console-link: the gateway speaks the unit's text console (doubles with
+//   three decimals)
 // Prints one line per check and ends with "corba-client: N passed, M failed".
 #include <errno.h>
 #include <math.h>
@@ -66,9 +68,14 @@ void eq_i(const std::string &what, long long got, long long want)
 {
 	result(got == want, what, fmt("got %lld, want %lld", got, want));
 }
-// Doubles travel as IEEE binary64 end to end: equality is exact.
+// Through binary frames doubles travel as IEEE binary64 end to end, and
+// equality is exact. The text console carries three decimals: then the
+// value must be exactly the console's rendering of the expected one.
+bool console_link;
 void eq_d(const std::string &what, double got, double want)
 {
+	if (console_link)
+		want = strtod(fmt("%.3f", want).c_str(), nullptr);
 	result(got == want, what, fmt("got %.17g, want %.17g", got, want));
 }
 void eq_s(const std::string &what, const char *got, const char *want)
@@ -522,6 +529,8 @@ int main(int argc, char **argv)
 			   i + 1 < argc) {
 			mode = argv[i];
 			arg = argv[++i];
+		} else if (!strcmp(argv[i], "--console-link")) {
+			console_link = true;
 		} else if (!strcmp(argv[i], "--unbound")) {
 			mode = argv[i];
 		} else {
