@@ -22,6 +22,12 @@ CORBA_OBJ := $(BUILD)/corba/obj
 CORBA_CXXFLAGS := -std=c++17 $(OPT) -g -Wall -Wextra -Werror -Wshadow -MMD -MP -I. \
 	-I$(CORBA_GEN) $(filter -fsanitize% -fno-sanitize% -fno-omit-frame-pointer --coverage \
 	-O0,$(CFLAGS_BASE))
+# GCC 12 under -fsanitize=address sees the servant's virtual base through the
+# instrumented allocation and reports a false -Warray-bounds in omniidl's
+# skeleton constructor; the plain build keeps the warning.
+ifeq ($(SANITIZE),1)
+CORBA_CXXFLAGS += -Wno-array-bounds
+endif
 CORBA_LDLIBS := -lomniORB4 -lomnithread -lpthread
 CORBA_CLIBS := $(PROTO_LIB) $(HOST_LIB) $(FW_LIB)
 CORBA_FMT_SRC := $(wildcard tools/corba/*.cc tests/corba/*.cc)

@@ -48,9 +48,10 @@ wait_for() {
 }
 # Folds the client's "corba-client: N passed, M failed" into the totals.
 run_client() {
-	local out p f
+	local out p f rc
 	out=$("$client" "$@" -ORBInitRef "NameService=corbaname::127.0.0.1:$ns_port" \
 		-ORBclientCallTimeOutPeriod 60000 2>&1)
+	rc=$?
 	printf '%s\n' "$out" | sed 's/^/  /'
 	p=$(printf '%s\n' "$out" | sed -n 's/^corba-client: \([0-9]*\) passed, \([0-9]*\) failed$/\1/p')
 	f=$(printf '%s\n' "$out" | sed -n 's/^corba-client: \([0-9]*\) passed, \([0-9]*\) failed$/\2/p')
@@ -60,6 +61,9 @@ run_client() {
 	fi
 	passed=$((passed + p))
 	failed=$((failed + f))
+	# A sanitizer report after the summary still fails the run.
+	[ $rc -ne 0 ] && [ "$f" -eq 0 ] && fail "vs-corba-client $1: exit status $rc"
+	return 0
 }
 
 # 1. The IDL. The specification lives next to the repository, not in it.

@@ -624,7 +624,8 @@ int main(int argc, char **argv)
 		    new VehicleServiceImpl(unit);
 		poa->activate_object_with_id(oid, servant);
 		obj = poa->id_to_reference(oid);
-		poa->the_POAManager()->activate();
+		PortableServer::POAManager_var pm = poa->the_POAManager();
+		pm->activate();
 
 		CORBA::String_var ior = orb->object_to_string(obj);
 		if (ior_file) {
@@ -660,7 +661,8 @@ int main(int argc, char **argv)
 		}
 		if (naming)
 			unregister_name(orb, name);
-		poa->deactivate_object(oid);
+		// The ORB does not destroy the INS POA by itself.
+		poa->destroy(true, true);
 		orb->shutdown(true);
 	} catch (CORBA::Exception &e) {
 		fprintf(stderr, "vehicle-corba: %s\n", e._name());
