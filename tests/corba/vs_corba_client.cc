@@ -11,6 +11,8 @@
 //     --silent MIN_MS  getState must raise TRANSIENT (COMPLETED_MAYBE) after at
 //                      least MIN_MS and within 30 s: the unit does not answer
 //     --unbound        NAME must no longer resolve
+//     --basic          a unit in real time (CAN): exact results that do not
+//                      depend on timing, one move
 //   --console-link: the gateway speaks the unit's text console (doubles with
 //   three decimals)
 // Prints one line per check and ends with "corba-client: N passed, M failed".
@@ -513,6 +515,51 @@ void suite::run()
 	eq_i("distinct operations called", static_cast<long long>(called.size()), 34);
 }
 
+// For a unit in real time (CAN in a QEMU guest): the results that do not
+// depend on when a call arrives, exactly; a move waited for by polling.
+void basic(VehicleService_ptr vs)
+{
+	CORBA::String_var v;
+	CORBA::Short st = -1, n = -1;
+	CORBA::Double t = -1, r = -1;
+	SeqAlarm_var seq;
+	Position p = {-1, -1, -1};
+
+	eq_b("getIFVersion", vs->getIFVersion(v.out()), true);
+	eq_s("getIFVersion: version", v, VehicleService::ifVersion);
+	eq_b("getVersion", vs->getVersion(v.out()), true);
+	eq_s("getVersion: ver", v, "Ver.1.0.0");
+	eq_b("getVelocityLimit", vs->getVelocityLimit(t, r), true);
+	eq_d("getVelocityLimit: velLimitT", t, 1000);
+	eq_d("getVelocityLimit: velLimitR", r, 180);
+	eq_b("getState", vs->getState(st, v.out()), true);
+	eq_i("getState: state", st, 0x19);
+	eq_s("getState: Msg", v, "Unpowered");
+	eq_b("moveForward(100) unpowered: refused", vs->moveForward(100), false);
+	eq_b("getActiveAlarm(4)", vs->getActiveAlarm(4, n, seq.out()), true);
+	eq_i("getActiveAlarm(4): numOfActiveAlarm", n, 1);
+	eq_i("getActiveAlarm(4): length", seq->length(), 1);
+	if (seq->length() == 1) {
+		eq_i("  alarm code", seq[0u].code, 121);
+		eq_s("  alarm type", alarm_type_name(seq[0u].type), "warning");
+		eq_s("  alarm source", seq[0u].source, "moveForward refused: servo off");
+	}
+	eq_b("clearAlarm", vs->clearAlarm(), true);
+	eq_b("setPower(true)", vs->setPower(true), true);
+	eq_b("setServo(true)", vs->setServo(true), true);
+	eq_b("moveForward(200)", vs->moveForward(200), true);
+	double end = now_s() + 60;
+	do {
+		vs->getState(st, v.out());
+	} while (st != 0x10 && now_s() < end && usleep(100000) == 0);
+	eq_i("getState after the move", st, 0x10);
+	eq_b("getPosition", vs->getPosition(p), true);
+	result(fabs(p.x - 200) < 1 && p.y == 0 && p.theta == 0, "getPosition: 200 mm forward",
+	       fmt("got %.17g %.17g %.17g", p.x, p.y, p.theta));
+	eq_b("setServo(false)", vs->setServo(false), true);
+	eq_b("setPower(false)", vs->setPower(false), true);
+}
+
 VehicleService_ptr find(CORBA::ORB_ptr orb, const char *name, const char *ior)
 {
 	CORBA::Object_var o;
@@ -548,7 +595,7 @@ int main(int argc, char **argv)
 			arg = argv[++i];
 		} else if (!strcmp(argv[i], "--console-link")) {
 			console_link = true;
-		} else if (!strcmp(argv[i], "--unbound")) {
+		} else if (!strcmp(argv[i], "--unbound") || !strcmp(argv[i], "--basic")) {
 			mode = argv[i];
 		} else {
 			fprintf(stderr, "vs-corba-client: bad argument %s\n", argv[i]);
@@ -573,6 +620,8 @@ int main(int argc, char **argv)
 			result(!CORBA::is_nil(vs), "narrow to VehicleService", "nil reference");
 			if (!strcmp(mode, "--all")) {
 				suite(vs).run();
+			} else if (!strcmp(mode, "--basic")) {
+				basic(vs);
 			} else if (!strcmp(mode, "--ping")) {
 				CORBA::Short st = -1;
 				CORBA::String_var m;
