@@ -170,6 +170,57 @@ static int run_fast(app_t *a)
 	return 0;
 }
 
+/* --pty --fast: the port is served at once without advancing time; stdin
+ * carries the lines that do ('$wait MS', '$sim ...', any operation), each
+ * answered on stdout. A harness that waits for each stdin reply before its
+ * next request through the port gets the same run every time. */
+static int run_pty_fast(app_t *a)
+{
+	while (!stop_requested && !a->write_failed) {
+		struct pollfd p[2] = {{.fd = a->pty_master, .events = POLLIN},
+				      {.fd = STDIN_FILENO, .events = POLLIN}};
+
+		if (poll(p, 2, -1) < 0) {
+			if (errno == EINTR)
+				continue;
+			return 1;
+		}
+		if (p[0].revents & POLLIN)
+			link_poll(&a->link, (uint32_t)(a->sim.now_us / 1000u));
+		if (!(p[1].revents & (POLLIN | POLLHUP | POLLERR)))
+			continue;
+		if (!read_input(a))
+			return 1;
+		for (;;) {
+			char *nl = memchr(a->in, '\n', a->in_len);
+			char reply[512];
+			size_t n;
+
+			if (nl) {
+				n = (size_t)(nl - a->in) + 1;
+				*nl = '\0';
+			} else if (a->in_len == sizeof(a->in) || (a->eof && a->in_len)) {
+				/* Over-long (the console refuses it) or unterminated at EOF. */
+				n = a->in_len;
+				a->in[n < sizeof(a->in) ? n : n - 1] = '\0';
+			} else {
+				break;
+			}
+			if (sim_exec(&a->sim, a->in, reply, sizeof(reply))) {
+				size_t len = strlen(reply);
+
+				reply[len] = '\n';
+				write_stdout(a, reply, len + 1);
+			}
+			memmove(a->in, a->in + n, a->in_len - n);
+			a->in_len -= n;
+		}
+		if (a->eof)
+			break;
+	}
+	return 0;
+}
+
 static int run_realtime(app_t *a)
 {
 	long long period_ns = 1000000000LL / (long long)a->sim.cfg.tick_hz;
@@ -225,8 +276,10 @@ static void usage(FILE *f)
 	      "  --status-hz N   CAN status frame rate, 0 (off)..1000 (default 10)\n"
 	      "  --pty           serve the serial link (console and frames, docs/protocol.md) on\n"
 	      "                  a new pseudo-terminal instead of stdin/stdout; prints its path\n"
-	      "                  as the first line on stdout; implies --realtime; runs until a\n"
-	      "                  signal\n"
+	      "                  as the first line on stdout; --realtime (default) runs until\n"
+	      "                  a signal; with --fast the port is served without advancing\n"
+	      "                  time, stdin lines ('$wait MS', '$sim ...') are answered on\n"
+	      "                  stdout, and the run ends at EOF on stdin\n"
 	      "  --baud N        line speed set on the pty (default 115200; nominal on a pty)\n"
 	      "  --help          this text\n"
 	      "Console on stdin/stdout (spec section 7); simulator extras: $wait MS, $sim ...\n"
@@ -356,10 +409,6 @@ int main(int argc, char **argv)
 		fprintf(stderr, "vehicle-sim: --can needs --realtime\n");
 		return 2;
 	}
-	if (pty && !realtime) {
-		fprintf(stderr, "vehicle-sim: --pty needs --realtime\n");
-		return 2;
-	}
 
 	vs_config_t cfg;
 	char err[512];
@@ -435,7 +484,7 @@ int main(int argc, char **argv)
 		cfg.tick_hz, ideal ? "ideal plant, " : "", realtime ? "realtime" : "fast",
 		config_path, io_path);
 
-	int rc = realtime ? run_realtime(a) : run_fast(a);
+	int rc = realtime ? run_realtime(a) : pty ? run_pty_fast(a) : run_fast(a);
 	if (a->can_on)
 		sim_can_close(&a->can);
 
