@@ -116,6 +116,13 @@ start_sim() {
 		fail "vehicle-sim --pty --fast did not give its pty"
 		finish
 	fi
+	# Time passes in the client's lockstep waits with no request to the
+	# unit: the link watchdog is off for this run (tested elsewhere).
+	echo '$watchdog 0' >&7
+	if ! read -r -t 60 -u 8 wd || [ "$wd" != "ok watchdog 0" ]; then
+		fail "\$watchdog 0: ${wd:-no reply}"
+		finish
+	fi
 }
 start_sim
 
