@@ -165,10 +165,15 @@ def main():
         st, p = call(bus, 17, struct.pack("<d", 300.0))  # moveForward 300
         if (st, p) != (0, b"\x01"):
             fail("moveForward: status %d payload %s" % (st, p.hex()))
-        time.sleep(0.3)
-        g = status_group(bus)
-        if g["state"] != 0x11 or g["vx"] <= 0:
-            fail("while moving: %r" % g)
+        # Status groups until one shows the move under way: the simulator's
+        # time, not the host's, decides when (bounded at 10 s of ours).
+        deadline = time.monotonic() + 10
+        while True:
+            g = status_group(bus)
+            if g["state"] == 0x11 and g["vx"] > 0:
+                break
+            if g["state"] != 0x11 or time.monotonic() > deadline:
+                fail("while moving: %r" % g)
         deadline = time.monotonic() + 10
         while time.monotonic() < deadline:
             st, p = call(bus, 11)  # getState
