@@ -168,12 +168,14 @@ static bool queue_full(const motion_t *m)
 /* Position where the last queued command ends, if known. */
 static bool tail_end(motion_t *m, q32_t *x, q32_t *y)
 {
-	if (m->q_count > 0) {
+	if (m->q_count > m->stop_drop) {
 		motion_cmd_t *c = q_at(m, (uint8_t)(m->q_count - 1));
 		*x = c->target.x_mm;
 		*y = c->target.y_mm;
 		return true;
 	}
+	if (m->stop_drop)
+		return false; /* where the stop ends: known when it runs */
 	if (m->mode == MODE_IDLE || m->mode == MODE_PATH) {
 		*x = m->ref.x_mm;
 		*y = m->ref.y_mm;
@@ -200,6 +202,8 @@ static void pop(motion_t *m)
 		return;
 	m->q_head = (uint8_t)((m->q_head + 1) % MOTION_QUEUE_LEN);
 	m->q_count--;
+	if (m->stop_drop)
+		m->stop_drop--;
 	limits_changed(m);
 }
 
@@ -392,6 +396,8 @@ static bool head_line_remaining(motion_t *m, q32_t *rem)
 static void plan_corner(motion_t *m, uint8_t i)
 {
 	motion_cmd_t *c = q_at(m, i), *n = q_at(m, (uint8_t)(i + 1));
+	if (i < m->stop_drop)
+		return; /* discarded by a stop: no corner into what follows */
 	if (c->kind != MCMD_CRUISE || n->kind != MCMD_CRUISE || !c->start_known || c->has_corner)
 		return;
 	/* The head command's stage 2 is its line running (next_piece), then
@@ -549,7 +555,11 @@ void motion_resume(motion_t *m)
 
 void motion_stop(motion_t *m)
 {
-	m->q_count = 0;
+	/* Path motion brakes along the path it is on, which may run on into
+	 * the queued commands (a cruise line ends at speed in its corner):
+	 * they are discarded once the unit is at rest, and commands queued
+	 * meanwhile run after that. */
+	m->stop_drop = m->q_count;
 	limits_changed(m);
 	m->stopping = true;
 	m->vtarget = (fx_twist_t){0};
@@ -558,6 +568,7 @@ void motion_stop(motion_t *m)
 void motion_halt(motion_t *m)
 {
 	m->q_count = 0;
+	m->stop_drop = 0;
 	limits_changed(m);
 	m->seg.kind = SEG_NONE;
 	m->v = 0;
@@ -944,9 +955,10 @@ static void path_tick(motion_t *m, fx_twist_t *out)
 	if (braking && m->v == 0) {
 		if (m->stopping) {
 			m->stopping = false;
-			m->q_count = 0;
+			while (m->stop_drop)
+				pop(m);
 			m->seg.kind = SEG_NONE;
-			m->mode = MODE_IDLE;
+			m->mode = m->q_count ? MODE_PATH : MODE_IDLE;
 		}
 		*out = (fx_twist_t){0};
 		return;
@@ -1270,7 +1282,8 @@ bool motion_is_paused(const motion_t *m)
 }
 uint8_t motion_queue_len(const motion_t *m)
 {
-	return m->q_count;
+	/* Not the commands a stop is braking through: they are gone. */
+	return (uint8_t)(m->q_count - m->stop_drop);
 }
 uint8_t motion_mode(const motion_t *m)
 {

@@ -568,6 +568,45 @@ static void test_empty_command_before_cruise(void **state)
 	assert_true(r.ax_max <= 500.0 + 1e-3);
 }
 
+/* stop() in the last millimetres of a cruise line, at speed into its
+ * corner: the unit brakes along the path through the corner at no more than
+ * the acceleration limit (fuzz_ops finding, reached through the link
+ * watchdog: the line used to end at speed, a step to zero), the route is gone
+ * once at rest, and a command queued while braking runs after. */
+static void test_stop_at_corner_brakes_along_path(void **state)
+{
+	(void)state;
+	rig_t r;
+	rig_init(&r, MOTION_KIN_DIFF);
+	assert_true(motion_cruise_abs(&r.m, q(1000), 0));
+	assert_true(motion_cruise_abs(&r.m, q(1000), q(1000)));
+	assert_true(motion_cruise_abs(&r.m, 0, q(1000)));
+	/* the corner begins at 800 mm; 790 mm in, the line ends in 10 mm */
+	while (d(r.m.ref.x_mm) < 790.0 && r.ticks < 10000)
+		rig_tick(&r);
+	/* over 150 mm/s: more than 11 mm of braking at 1000 mm/s^2 */
+	assert_true(r.vx > 150.0);
+	r.ax_max = r.aw_max = 0;
+	motion_stop(&r.m);
+	assert_int_equal(motion_queue_len(&r.m), 0);
+	fx_pose_t to = {q(500), q(500), q(90)};
+	assert_true(motion_linear_abs(&r.m, &to));
+	assert_int_equal(motion_queue_len(&r.m), 1);
+	uint32_t n = 0;
+	do {
+		rig_tick(&r);
+	} while (motion_is_moving(&r.m) && ++n < 5000);
+	assert_true(r.ax_max <= 1000.0 + 1e-3);
+	assert_true(r.aw_max <= 360.0 + 1e-3);
+	/* stopped inside the corner, off the first line */
+	assert_true(d(r.m.ref.y_mm) > 0.0 && d(r.m.ref.y_mm) < 200.0);
+	run_until_idle(&r, 30000);
+	assert_int_equal(r.m.ref.x_mm, to.x_mm);
+	assert_int_equal(r.m.ref.y_mm, to.y_mm);
+	assert_int_equal(r.m.ref.th_deg, to.th_deg);
+	assert_int_equal(motion_queue_len(&r.m), 0);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -588,6 +627,7 @@ int main(void)
 	    cmocka_unit_test(test_accel_lowered_while_paused),
 	    cmocka_unit_test(test_rot_accel_lowered_while_paused),
 	    cmocka_unit_test(test_empty_command_before_cruise),
+	    cmocka_unit_test(test_stop_at_corner_brakes_along_path),
 	};
 	return cmocka_run_group_tests_name("motion", tests, NULL, NULL);
 }
