@@ -331,13 +331,17 @@ def c_state_strings(b):
     expect(b, "getState", 'ok true 24 "Powered"')
     expect(b, "setServo on", "ok true")
     expect(b, "getState", 'ok true 16 "Ready"')
+    # slowly (5 s of the unit's time), so that the harness, delayed on a
+    # busy host while the emulated clock runs on, still finds it Busy
+    expect(b, "setVelocity 100 90", "ok true")
     expect(b, "moveForward 500", "ok true")
     expect(b, "getState", 'ok true 17 "Busy"')
     expect(b, "moveTurn 90", "ok false")
     expect(b, "getActiveAlarm 5", 'ok true 1 1 120 warning "moveTurn refused: unit not ready"')
     expect(b, "getState", 'ok true 17 "Busy"')
-    b.settle(4000)
+    b.settle(8000)
     expect_pos(b, 500, 0, 0)
+    expect(b, "setVelocity 500 90", "ok true")
     expect(b, "getState", 'ok true 18 "Warning-120"')
     expect(b, "moveForward -500", "ok true")
     b.settle(4000)
