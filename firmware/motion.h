@@ -178,8 +178,9 @@ void motion_joystick_enable(motion_t *m, bool on);
 void motion_joystick_input(motion_t *m, int16_t x, int16_t y, int16_t r, bool present);
 
 /* pause: decelerate at the acceleration limit, keep all work; resume
- * continues it. stop: decelerate at the acceleration limit and discard all
- * work. halt: zero velocity at once and discard everything (servo is off
+ * continues it. stop: decelerate at the acceleration limit along the path
+ * (through queued corners if it must) and discard the work queued so far
+ * once at rest; commands queued while it brakes run after. halt: zero velocity at once and discard everything (servo is off
  * or power is gone; nothing to decelerate). */
 void motion_pause(motion_t *m);
 void motion_resume(motion_t *m);
