@@ -9,6 +9,8 @@ COV_BRANCH_MIN ?= 85
 
 .PHONY: coverage
 
+# Reports go to files under the build: gcovr replaces its output file, and
+# as root it would replace /dev/null with a regular file.
 coverage:
 	$(Q)mkdir -p $(COV_BUILD)
 	$(Q)find $(COV_BUILD) -name '*.gcda' -delete 2>/dev/null || true
@@ -16,10 +18,10 @@ coverage:
 		|| { tail -n 40 $(COV_BUILD).log; exit 1; }
 	@echo "== firmware/"
 	$(Q)gcovr -r . --object-directory $(COV_BUILD)/obj --filter 'firmware/' \
-		--exclude-unreachable-branches --exclude-throw-branches -s --txt /dev/null
+		--exclude-unreachable-branches --exclude-throw-branches -s --txt $(COV_BUILD)/firmware.txt
 	@echo "== proto/"
 	$(Q)gcovr -r . --object-directory $(COV_BUILD)/obj --filter 'proto/' \
-		--exclude-unreachable-branches -s --txt /dev/null
+		--exclude-unreachable-branches -s --txt $(COV_BUILD)/proto.txt
 	@echo "== firmware/ per file: lines"
 	$(Q)gcovr -r . --object-directory $(COV_BUILD)/obj --filter 'firmware/' \
 		--exclude-unreachable-branches | grep '^firmware/'
@@ -28,4 +30,4 @@ coverage:
 		--exclude-unreachable-branches -b | grep '^firmware/'
 	$(Q)gcovr -r . --object-directory $(COV_BUILD)/obj --filter 'firmware/' \
 		--exclude-unreachable-branches --fail-under-line $(COV_LINE_MIN) \
-		--fail-under-branch $(COV_BRANCH_MIN) -o /dev/null
+		--fail-under-branch $(COV_BRANCH_MIN) -o $(COV_BUILD)/check.txt
