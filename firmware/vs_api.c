@@ -132,8 +132,7 @@ int vehicle_init(vehicle_t *v, const vs_config_t *cfg, const vs_hal_t *hal, cons
 	v->period_us = 1000000u / cfg->tick_hz;
 	v->drive_timeout_ticks = ms_to_ticks(cfg->drive_timeout_ms, cfg->tick_hz);
 	v->loop_late_us = cfg->loop_late_ms * 1000u;
-	v->link_timeout_ticks =
-	    cfg->link_timeout_ms ? ms_to_ticks(cfg->link_timeout_ms, cfg->tick_hz) : 0u;
+	vehicle_set_link_timeout(v, cfg->link_timeout_ms);
 	v->encoder_stuck_ticks = ms_to_ticks(cfg->encoder_stuck_ms, cfg->tick_hz);
 	/* A speed that must move the encoder by 20 counts within the window:
 	 * well clear of quantisation, so a slow creep never trips it. */

@@ -75,6 +75,17 @@ static int send_frame(can_ctx_t *k, const canlink_frame_t *f)
 	return VC_OK;
 }
 
+/* The next frame on the unit's response id; status frames met on the way
+ * are taken as status, others are not ours. */
+static int next_response(can_ctx_t *k, uint32_t t0, unsigned timeout_ms, canlink_frame_t *f)
+{
+	for (;;) {
+		int r = next_frame(k, t0, timeout_ms, f);
+		if (r != VC_OK || (!take_status(k, f) && f->id == CANLINK_ID_RESPONSE + k->node))
+			return r;
+	}
+}
+
 /* Waits for the unit's flow control frame after a first frame or a block:
  * VC_OK with the block size in *bs (0: the rest at once), VC_E_NAK when the
  * unit cannot take the message (its NAK follows), VC_E_TIMEOUT, VC_E_LINK. */
@@ -82,11 +93,9 @@ static int await_fc(can_ctx_t *k, uint32_t t0, unsigned timeout_ms, uint8_t *bs)
 {
 	for (;;) {
 		canlink_frame_t f;
-		int r = next_frame(k, t0, timeout_ms, &f);
+		int r = next_response(k, t0, timeout_ms, &f);
 		if (r != VC_OK)
 			return r;
-		if (take_status(k, &f) || f.id != CANLINK_ID_RESPONSE + k->node)
-			continue;
 		if ((f.data[0] & 0xF0u) != CANLINK_PCI_FLOW || f.dlc < CANLINK_FC_DLC) {
 			/* A late answer to an earlier request. */
 			k->stats.stale++;
@@ -139,11 +148,9 @@ static int await_response(can_ctx_t *k, uint8_t opcode, uint32_t t0, unsigned ti
 {
 	for (;;) {
 		canlink_frame_t f;
-		int r = next_frame(k, t0, timeout_ms, &f);
+		int r = next_response(k, t0, timeout_ms, &f);
 		if (r != VC_OK)
 			return r;
-		if (take_status(k, &f) || f.id != CANLINK_ID_RESPONSE + k->node)
-			continue;
 		int fr = canlink_rx_feed(&k->rx, &f, k->bus.now_ms(k->bus.ctx) * 1000u);
 		if (fr < 0) {
 			k->stats.bad++;
