@@ -508,6 +508,10 @@ bool motion_continuous_rel(motion_t *m, const fx_pose_t *rel)
 	t.th_deg = fx_wrap_deg(m->ref.th_deg + rel->th_deg);
 	m->goal = t;
 	m->goal_position_done = false;
+	/* From rest the first tick picks the direction; a retarget keeps the
+	 * one the unit is driving in. */
+	if (m->mode != MODE_CONTINUOUS)
+		m->goal_reverse = false;
 	m->mode = MODE_CONTINUOUS;
 	return true;
 }
@@ -1180,14 +1184,30 @@ static void continuous_tick(motion_t *m, fx_twist_t *out)
 			want.vx_pt = fx_mul_q30(sp, fx_cos_bam(b));
 			want.vy_pt = fx_mul_q30(sp, fx_sin_bam(b));
 		} else {
-			/* Turn toward the goal; translate along the projected distance. */
+			/* Drive forward or backward, whichever faces the goal: a
+			 * goal that falls behind (a retarget inside the stopping
+			 * distance, an overshoot) is reached by backing along the
+			 * line, not by turning round at speed and circling it. The
+			 * 20 degree band about the side keeps the choice from
+			 * chattering. */
 			q32_t ae = fx_abs64(e);
+			if (!m->goal_reverse && ae > fx_from_int(100))
+				m->goal_reverse = true;
+			else if (m->goal_reverse && ae < fx_from_int(80))
+				m->goal_reverse = false;
+			if (m->goal_reverse) {
+				e = fx_wrap_deg(e + fx_from_int(180));
+				ae = fx_abs64(e);
+			}
+			/* Turn toward the goal; translate along the projected distance. */
 			q32_t wr = fx_min64(traj_umax(ae, m->a_r_pt2), m->v_r_pt);
 			want.w_pt = e < 0 ? -wr : wr;
 			uint32_t b = fx_deg_to_bam(e);
 			q32_t proj = fx_mul_q30(dist, fx_cos_bam(b));
 			if (proj > 0 && ae < fx_from_int(45))
 				want.vx_pt = fx_min64(traj_umax(proj, m->a_t_pt2), vt_eff(m));
+			if (m->goal_reverse)
+				want.vx_pt = -want.vx_pt;
 			if (dist < m->v_t_pt && ae < fx_from_int(1))
 				want.w_pt = 0;
 		}
@@ -1205,9 +1225,11 @@ static void continuous_tick(motion_t *m, fx_twist_t *out)
 	q32_t prev_vx = m->vel.vx_pt;
 	slew2(&m->vel.vx_pt, &m->vel.vy_pt, want.vx_pt, want.vy_pt, at);
 	m->vel.w_pt = slew(m->vel.w_pt, want.w_pt, ar);
-	/* Never step past the goal: the last step covers the exact remainder. */
-	if (!m->goal_position_done && m->vel.vx_pt > dist && m->p.kin == MOTION_KIN_DIFF)
-		m->vel.vx_pt = fx_max64(dist, prev_vx - at);
+	/* Never step past the goal: the last step covers the exact remainder
+	 * (backing up, the same with the signs turned). */
+	q32_t dir = m->goal_reverse ? -1 : 1;
+	if (!m->goal_position_done && dir * m->vel.vx_pt > dist && m->p.kin == MOTION_KIN_DIFF)
+		m->vel.vx_pt = dir * fx_max64(dist, dir * prev_vx - at);
 	*out = m->vel;
 	odom_integrate(&m->ref, out, NULL);
 	if (m->goal_position_done) {
@@ -1219,7 +1241,7 @@ static void continuous_tick(motion_t *m, fx_twist_t *out)
 			m->mode = MODE_IDLE;
 		}
 	} else if (fx_hypot(m->goal.x_mm - m->ref.x_mm, m->goal.y_mm - m->ref.y_mm) < TINY_MM &&
-		   m->vel.vx_pt <= at) {
+		   fx_abs64(m->vel.vx_pt) <= at) {
 		m->ref.x_mm = m->goal.x_mm;
 		m->ref.y_mm = m->goal.y_mm;
 		m->vel.vx_pt = 0;

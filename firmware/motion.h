@@ -142,6 +142,7 @@ typedef struct {
 	/* Continuous mode goal (world frame). */
 	fx_pose_t goal;
 	bool goal_position_done;
+	bool goal_reverse; /* differential base: backing toward the goal */
 } motion_t;
 
 void motion_init(motion_t *m, const motion_params_t *p);
@@ -169,7 +170,10 @@ bool motion_cruise_abs(motion_t *m, q32_t x_mm, q32_t y_mm);
 
 /* Velocity and goal modes. These take over from jog/continuous/joystick
  * with continuous velocity; they are refused (false) while queued path
- * motion runs. */
+ * motion runs. Continuous: the newest goal wins; velocity stays continuous,
+ * so a goal nearer than the stopping distance is passed and then reached
+ * by backing along the line (a differential base drives toward a goal that
+ * lies behind it in reverse rather than turning round). */
 bool motion_continuous_rel(motion_t *m, const fx_pose_t *rel);
 /* Body-frame velocity per second, Q32. All zero: decelerate to a stop. */
 bool motion_jog(motion_t *m, q32_t vx, q32_t vy, q32_t w);
@@ -180,8 +184,9 @@ void motion_joystick_input(motion_t *m, int16_t x, int16_t y, int16_t r, bool pr
 /* pause: decelerate at the acceleration limit, keep all work; resume
  * continues it. stop: decelerate at the acceleration limit along the path
  * (through queued corners if it must) and discard the work queued so far
- * once at rest; commands queued while it brakes run after. halt: zero velocity at once and discard everything (servo is off
- * or power is gone; nothing to decelerate). */
+ * once at rest; commands queued while it brakes run after. halt: zero
+ * velocity at once and discard everything (servo is off or power is gone;
+ * nothing to decelerate). */
 void motion_pause(motion_t *m);
 void motion_resume(motion_t *m);
 void motion_stop(motion_t *m);

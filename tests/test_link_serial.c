@@ -703,8 +703,10 @@ static void test_vehiclectl(void **state)
 		double x = 1, y = 1, th = 0;
 
 		assert_int_equal(sscanf(out, "true x=%lf y=%lf theta=%lf", &x, &y, &th), 3);
-		assert_true(fabs(x) < 0.5 && fabs(y) < 0.5);
-		assert_true(fabs(th + 90.0) < 0.05);
+		if (!(fabs(x) < 0.5 && fabs(y) < 0.5 && fabs(th + 90.0) < 0.05)) {
+			ctl(row, sizeof(row), "--port %s getActiveAlarm 4", PTY_PATH);
+			fail_msg("pose %s, alarms %s", out, row);
+		}
 	}
 	stop_sim();
 }

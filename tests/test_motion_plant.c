@@ -267,6 +267,45 @@ static void test_continuous_retarget_is_smooth(void **state)
 	}
 }
 
+/* A retarget closer than the stopping distance: the unit brakes at the set
+ * acceleration, passes the goal, and backs along the same line to it. It
+ * never turns (the goal stays dead ahead or dead astern) and never steps
+ * its velocity by more than the acceleration allows. */
+static void test_continuous_retarget_inside_stopping_distance(void **state)
+{
+	rig_t *r = *state;
+	vs_diag_t d;
+	exec_ok(r, "moveContinuousRel 3000 0 0", "ok true");
+	sim_run_ms(&r->sim, 1500);
+	assert_true(fabs(r->s[r->n - 1].v - VT) < 1e-6); /* cruising */
+	vehicle_diag(sim_vehicle(&r->sim), &d);
+	double x0 = (double)d.ref_pose.x_mm / Q;
+	exec_ok(r, "moveContinuousRel 100 0 0", "ok true");
+	size_t from = r->n;
+	run_until_ready(r, 5000);
+	double xmax = -1e9, vmin = 1e9;
+	for (size_t i = from; i < r->n; i++) {
+		xmax = fmax(xmax, r->s[i].x);
+		vmin = fmin(vmin, r->s[i].v);
+		assert_true(r->s[i].w == 0.0 && r->s[i].th == 0.0 && r->s[i].y == 0.0);
+		double dv = fabs(r->s[i].v - r->s[i - 1].v);
+		if (dv > AT / HZ * 1.0000001)
+			fail_msg("step %.6f mm/s at tick %zu", dv, i);
+	}
+	/* Braking from 400 mm/s at 300 mm/s^2 takes 266.7 mm: 166.7 past. */
+	assert_true(fabs(xmax - (x0 + VT * VT / (2 * AT))) < VT / HZ);
+	assert_true(vmin < -100.0);
+	sample_t *e = &r->s[r->n - 1];
+	printf("continuous: braked %.4f mm past the call, backed at up to %.1f mm/s, ended at "
+	       "%.4f (true %.4f) for 100, %zu ms\n",
+	       xmax - x0, -vmin, e->x - x0, e->tx - x0, r->n - from);
+	/* the odometry's and the plant's resolution, as moveForward's test */
+	assert_true(fabs(e->x - (x0 + 100.0)) <= 0.05 && fabs(e->tx - (x0 + 100.0)) <= 0.05);
+	assert_true(e->th == 0.0 && e->y == 0.0 && fabs(e->ty) <= 0.05);
+	/* over within the braking, the return and the last approach */
+	assert_true(r->n - from < 4000);
+}
+
 static void test_jog_watchdog(void **state)
 {
 	rig_t *r = *state;
@@ -364,6 +403,8 @@ int main(void)
 	    cmocka_unit_test_setup_teardown(test_linear_abs_square, setup, teardown),
 	    cmocka_unit_test_setup_teardown(test_cruise_does_not_stop, setup, teardown),
 	    cmocka_unit_test_setup_teardown(test_continuous_retarget_is_smooth, setup, teardown),
+	    cmocka_unit_test_setup_teardown(test_continuous_retarget_inside_stopping_distance,
+					    setup, teardown),
 	    cmocka_unit_test_setup_teardown(test_jog_watchdog, setup, teardown),
 	    cmocka_unit_test_setup_teardown(test_set_velocity_while_moving, setup, teardown),
 	    cmocka_unit_test_setup_teardown(test_omni_base, setup, teardown),

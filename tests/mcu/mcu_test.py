@@ -2,14 +2,15 @@
 """The Cortex-M image on QEMU's emulated board (docs/mcu.md).
 
 Boots BUILD/cortex-m4/vehicle.elf on mps2-an386 (Cortex-M4, CMSDK UART,
-25 MHz SysTick) with -icount shift=6,sleep=off, so that the unit's time is
+25 MHz SysTick) with -icount shift=6,align=on, so that the unit's time is
 instruction time: one instruction takes 64 ns of the unit's clock whatever
-the host's load, and what a tick or a request costs is exact. The board
-polls its UART between ticks and never sleeps, so its clock runs about as
-fast as the host's: a host's delay between two requests counts about once
-in the unit's time (with an idle core and sleep=off, QEMU would jump the
-clock a whole period each time it waits to hand over a received byte).
-Over the UART (-serial pty) it runs the console conformance
+the host's load, and what a tick or a request costs is exact. align=on
+keeps that clock from running ahead of the host's: the emulator pauses
+instead, and its I/O thread runs. (With sleep=off the board, which polls
+its UART and never sleeps, could hold QEMU's I/O off for seconds on a
+loaded host: the UART's transmitter stalled, the board's ring filled and
+replies were cut.) A loaded host makes the unit late, never fast.
+Over the UART (a pty handed to QEMU's tty backend) it runs the console conformance
 cases of tests/test_conformance.c that the board supports (its plant is the
 loopback drives of hal/cortexm/loop_hal.c: no IO module, no relay, contact
 or drive faults to inject, the reference wheel), then vehiclectl with binary
@@ -53,32 +54,35 @@ class Board:
     def __init__(self, elf, machine, tmp):
         self.elf = elf
         self.qmp_path = os.path.join(tmp, "qmp-%s.sock" % machine)
+        # The UART is a pty this harness opens and hands to QEMU's tty
+        # backend (-add-fd), not QEMU's own pty backend: that one takes a
+        # read that finds nothing (EAGAIN, seen on a loaded host) for a
+        # hang-up and drops what the board sends for up to a second. On a
+        # tty, a full pty holds the UART's transmitter and nothing is lost.
+        # QEMU's stdout (its "guest is late" warnings) goes to the log.
+        master, self.fd = os.openpty()
+        tty.setraw(self.fd)
+        self.pty = os.ttyname(self.fd)
+        self.log = open(os.path.join(tmp, "qemu-%s.log" % machine), "w+b")
         self.proc = subprocess.Popen(
             ["qemu-system-arm", "-M", machine, "-nographic", "-monitor", "none",
              "-qmp", "unix:%s,server=on,wait=off" % self.qmp_path,
-             "-serial", "pty", "-icount", "shift=%d,sleep=off" % ICOUNT_SHIFT,
-             "-kernel", elf],
-            stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
-        self.pty = None
-        deadline = time.monotonic() + 30
-        head = b""
-        while self.pty is None and time.monotonic() < deadline:
-            r, _, _ = select.select([self.proc.stdout], [], [], 1)
-            if r:
-                b = os.read(self.proc.stdout.fileno(), 4096)
-                if not b:
-                    break
-                head += b
-                m = re.search(rb"redirected to (/dev/pts/\d+)", head)
-                if m:
-                    self.pty = m.group(1).decode()
-        if self.pty is None:
-            self.close()
-            raise RuntimeError("qemu did not start: %r" % head)
-        self.fd = os.open(self.pty, os.O_RDWR | os.O_NOCTTY)
-        tty.setraw(self.fd)
+             "-add-fd", "fd=%d,set=1" % master,
+             "-chardev", "serial,id=uart,path=/dev/fdset/1", "-serial", "chardev:uart",
+             "-icount", "shift=%d,align=on" % ICOUNT_SHIFT, "-kernel", elf],
+            stdin=subprocess.DEVNULL, stdout=self.log, stderr=subprocess.STDOUT,
+            pass_fds=(master,), start_new_session=True)
+        os.close(master)
         self.rx = b""
         self.qmp = None
+        deadline = time.monotonic() + 30
+        while not os.path.exists(self.qmp_path):
+            if self.proc.poll() is not None or time.monotonic() > deadline:
+                self.log.seek(0)
+                err = self.log.read()
+                self.close()
+                raise RuntimeError("qemu did not start: %r" % err)
+            time.sleep(0.05)
 
     def close(self):
         if getattr(self, "fd", None) is not None:
@@ -91,6 +95,7 @@ class Board:
             except subprocess.TimeoutExpired:
                 self.proc.kill()
                 self.proc.wait()
+        self.log.close()
 
     # ---- the UART ---------------------------------------------------------
     def write(self, data):
