@@ -73,7 +73,7 @@ run() {
 	# -i: the guest's clock counts instructions, so a busy host cannot
 	# stretch the time between two frames a script sends (the unit drops a
 	# message whose next frame is 250 ms late) or make a peer time out.
-	"$top/tools/qemu/run-guest.sh" -i -t 300 "$here/qemu/$script" "$@" | tee "$log"
+	"$top/tools/qemu/run-guest.sh" -i -t 300 "$here/qemu/$script" "$@" 2>&1 | tee "$log"
 	rc=${PIPESTATUS[0]}
 	n=$(grep -cE '^[a-z_]+: PASS: ' "$log")
 	rm -f "$log"

@@ -18,6 +18,8 @@
 #   @@vs-qemu-exit@@ TOKEN rc=<status> uptime=<seconds>
 # and powers off. A setup failure prints the marker with rc=125.
 set -euo pipefail
+# A command that fails under set -e says where (else the run ends silently).
+trap 'echo "mkinitramfs: line $LINENO: \"$BASH_COMMAND\" failed (status $?)" >&2' ERR
 
 here=$(cd "$(dirname "$0")" && pwd)
 top=$(cd "$here/../.." && pwd)

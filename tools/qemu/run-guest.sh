@@ -18,6 +18,9 @@
 # could not be set up; 1 when the guest ended without reporting a result.
 # The console log is kept in build/qemu/logs/<script>.log.
 set -euo pipefail
+# A command that fails under set -e says where (else the run ends silently).
+on_err() { echo "run-guest: line $1: \"$2\" failed (status $3)" >&2; }
+trap 'on_err $LINENO "$BASH_COMMAND" $?' ERR
 
 here=$(cd "$(dirname "$0")" && pwd)
 top=$(cd "$here/../.." && pwd)
@@ -68,6 +71,7 @@ t1=$(date +%s.%N)
 
 echo "run-guest: booting $kernel for $script (limit $limit s)"
 set +e
+trap - ERR
 # -nodefaults: no VGA, NIC or option ROMs to set up; the serial port is the
 # console. stdin is closed so a run never waits on, or alters, a terminal.
 timeout -k 5 "$limit" qemu-system-x86_64 \
@@ -78,6 +82,7 @@ timeout -k 5 "$limit" qemu-system-x86_64 \
 	tr -d '\r' | tee "$runlog"
 qrc=${PIPESTATUS[0]}
 set -e
+trap 'on_err $LINENO "$BASH_COMMAND" $?' ERR
 t2=$(date +%s.%N)
 
 result=$(sed -n "s/^.*@@vs-qemu-exit@@ $token rc=\([0-9]*\) uptime=\([0-9.]*\).*/\1 \2/p" "$runlog" | tail -n 1)
