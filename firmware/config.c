@@ -32,6 +32,8 @@ void vs_config_defaults(vs_config_t *c)
 	c->jog_timeout_default_ms = 500;
 
 	c->wheel_kp_per_s = 20.0;
+	for (unsigned i = 0; i < VS_MAX_AXES; i++)
+		c->drive_lag_ms[i] = 20.0;
 	c->following_error_mm = 50.0;
 	c->encoder_stuck_ms = 300;
 	c->drive_timeout_ms = 50;
@@ -145,6 +147,9 @@ int vs_config_check(const vs_config_t *c, const char **field)
 	/* Per-tick loop gain at most 1/4 keeps the discrete loop well damped. */
 	if (c->wheel_kp_per_s * 4.0 > (double)c->tick_hz)
 		FAIL(-2, "wheel_kp_per_s");
+	for (unsigned i = 0; i < VS_MAX_AXES; i++)
+		if (!in_range(c->drive_lag_ms[i], 0.0, 1000.0))
+			FAIL(-1, "drive_lag_ms");
 	if (!positive_upto(c->following_error_mm, 10000.0))
 		FAIL(-1, "following_error_mm");
 	if (c->encoder_stuck_ms < 10 || c->encoder_stuck_ms > 60000)

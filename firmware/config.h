@@ -49,7 +49,10 @@ typedef struct {
 	uint16_t jog_timeout_default_ms;
 
 	/* Wheel position loop and supervision. */
-	double wheel_kp_per_s;	   /* position loop gain, 1/s */
+	double wheel_kp_per_s; /* position loop gain, 1/s */
+	/* Per axis: the drive's velocity lag, ms (its first-order time
+	 * constant from setpoint to speed); 0 = follows at once. */
+	double drive_lag_ms[VS_MAX_AXES];
 	double following_error_mm; /* measured vs commanded wheel travel */
 	uint32_t encoder_stuck_ms; /* commanded motion with no encoder change */
 	uint32_t drive_timeout_ms; /* drive replies missing this long: fault */

@@ -45,6 +45,7 @@ void kin_sync(kin_t *k, const int32_t meas[])
 	for (uint8_t i = 0; i < k->p.n; i++) {
 		k->last_meas[i] = meas[i];
 		k->ref_counts_q32[i] = 0;
+		k->last_travel[i] = 0;
 	}
 	k->synced = true;
 }
@@ -62,7 +63,10 @@ static inline int64_t wheel_step(kin_t *k, uint8_t i, q32_t travel, int32_t d, i
 {
 	int64_t err_q32 = k->ref_counts_q32[i] + travel - (int64_t)d * FX_ONE;
 	k->ref_counts_q32[i] = err_q32;
-	int64_t ff_q8 = (travel * (int64_t)k->p.tick_hz) >> 24;
+	int64_t acc = travel - k->last_travel[i];
+	k->last_travel[i] = travel;
+	int64_t lead = (acc >> 16) * k->p.lag_q16[i];
+	int64_t ff_q8 = ((travel + lead) * (int64_t)k->p.tick_hz) >> 24;
 	int64_t fb_q8 = ((err_q32 >> 16) * k->p.kp_q16) >> 24;
 	*out_cps_q8 = sat32(ff_q8 + fb_q8);
 	return fx_abs64(err_q32) >> 32;

@@ -19,6 +19,9 @@
 #define ANGLE_MAX_DEG 36000.0
 #define TWO_POW_32    4294967296.0
 #define PI_D	      3.14159265358979323846
+/* The feed-forward's lead for a drive lag, in ticks (kin.h): the lag plus
+ * the tick by which the wheel loop runs ahead of its reference. */
+#define LAG_TICKS(ms, hz) ((ms) > 0.0 ? (ms) * (double)(hz) / 1000.0 + 1.0 : 0.0)
 
 /* Finite and |x| <= lim. */
 static bool within(double x, double lim)
@@ -123,6 +126,9 @@ int vehicle_init(vehicle_t *v, const vs_config_t *cfg, const vs_hal_t *hal, cons
 	    .deg_per_mm = to_q32(1.0 / mm_per_deg),
 	    .kp_q16 = (int64_t)(cfg->wheel_kp_per_s * 65536.0 + 0.5),
 	};
+	for (unsigned i = 0; i < VS_MAX_AXES; i++)
+		kp.lag_q16[i] =
+		    (int64_t)(LAG_TICKS(cfg->drive_lag_ms[i], cfg->tick_hz) * 65536.0 + 0.5);
 	kin_init(&v->kin, &kp);
 
 	v->vel_set = (vs_velocity_t){cfg->vel_default_t_mm_s, cfg->vel_default_r_deg_s};

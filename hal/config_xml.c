@@ -55,6 +55,10 @@ static const field_t fields[] = {
     F("defaults", "acc_r_deg_s2", T_DOUBLE, acc_default_r_deg_s2, 0, 100000, true),
     F("defaults", "jog_timeout_ms", T_U16, jog_timeout_default_ms, 1, 32767, false),
     F("supervision", "wheel_kp_per_s", T_DOUBLE, wheel_kp_per_s, 0, 1000, true),
+    F("drives", "axis0_lag_ms", T_DOUBLE, drive_lag_ms[0], 0, 1000, false),
+    F("drives", "axis1_lag_ms", T_DOUBLE, drive_lag_ms[1], 0, 1000, false),
+    F("drives", "axis2_lag_ms", T_DOUBLE, drive_lag_ms[2], 0, 1000, false),
+    F("drives", "axis3_lag_ms", T_DOUBLE, drive_lag_ms[3], 0, 1000, false),
     F("supervision", "following_error_mm", T_DOUBLE, following_error_mm, 0, 10000, true),
     F("supervision", "encoder_stuck_ms", T_U32, encoder_stuck_ms, 10, 60000, false),
     F("supervision", "drive_timeout_ms", T_U32, drive_timeout_ms, 1, 60000, false),
@@ -72,8 +76,8 @@ static const field_t fields[] = {
 };
 #define NFIELDS (sizeof(fields) / sizeof(fields[0]))
 
-static const char *const sections[] = {"geometry", "limits",  "defaults", "supervision",
-				       "motion",   "battery", "devices"};
+static const char *const sections[] = {"geometry",    "limits", "defaults", "drives",
+				       "supervision", "motion", "battery",  "devices"};
 #define NSECTIONS (sizeof(sections) / sizeof(sections[0]))
 
 typedef struct {

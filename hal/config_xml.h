@@ -14,6 +14,8 @@
  *     <limits vel_t_mm_s="1000" vel_r_deg_s="180" acc_t_mm_s2="1000" acc_r_deg_s2="360"/>
  *     <defaults vel_t_mm_s="500" vel_r_deg_s="90" acc_t_mm_s2="500" acc_r_deg_s2="180"
  *               jog_timeout_ms="500"/>
+ *     <drives axis0_lag_ms="20" axis1_lag_ms="20" axis2_lag_ms="20" axis3_lag_ms="20"/>
+ *               (each drive's speed lag, 0..1000 ms: firmware/kin.h)
  *     <supervision wheel_kp_per_s="20" following_error_mm="50" encoder_stuck_ms="300"
  *                  drive_timeout_ms="50"/>
  *     <motion cruise_blend_mm="200" caution_vel_t_mm_s="0"/>

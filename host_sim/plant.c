@@ -27,6 +27,12 @@ void plant_params_ideal(plant_params_t *p)
 	p->current_limit_a = 0.0;
 }
 
+void plant_config_lag(const plant_params_t *p, vs_config_t *cfg)
+{
+	for (unsigned i = 0; i < VS_MAX_AXES; i++)
+		cfg->drive_lag_ms[i] = p->tau_s * 1000.0;
+}
+
 static int io_index(const plant_t *pl, uint32_t id)
 {
 	if (id == 0)

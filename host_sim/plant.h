@@ -47,6 +47,10 @@ void plant_params_default(plant_params_t *p);
 /* For precise motion tests: no lag, no acceleration or current limit
  * (battery and IO as the default). */
 void plant_params_ideal(plant_params_t *p);
+/* States plant p's motor lag in the firmware's configuration (every axis):
+ * the wheel loop's feed-forward leads by the configured lag, so a
+ * configuration must name the drive it runs. */
+void plant_config_lag(const plant_params_t *p, vs_config_t *cfg);
 /* Encoder resolution for precise tests: set in the configuration, since the
  * firmware converts counts with it. Fits the HAL's Q8 setpoint range with
  * the reference limits. */

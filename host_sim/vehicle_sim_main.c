@@ -422,6 +422,7 @@ int main(int argc, char **argv)
 		/* The firmware converts counts with the configured resolution, so
 		 * the fine encoder goes into the configuration too. */
 		cfg.encoder_counts_per_rev = PLANT_HIRES_COUNTS_PER_REV;
+		plant_config_lag(&pp, &cfg);
 	} else {
 		plant_params_default(&pp);
 	}

@@ -30,6 +30,8 @@ static void assert_same_settings(const vs_config_t *a, const vs_config_t *b)
 	assert_true(a->acc_default_r_deg_s2 == b->acc_default_r_deg_s2);
 	assert_int_equal(a->jog_timeout_default_ms, b->jog_timeout_default_ms);
 	assert_true(a->wheel_kp_per_s == b->wheel_kp_per_s);
+	for (int i = 0; i < VS_MAX_AXES; i++)
+		assert_true(a->drive_lag_ms[i] == b->drive_lag_ms[i]);
 	assert_true(a->following_error_mm == b->following_error_mm);
 	assert_int_equal(a->encoder_stuck_ms, b->encoder_stuck_ms);
 	assert_int_equal(a->drive_timeout_ms, b->drive_timeout_ms);
@@ -129,6 +131,8 @@ static void shipped_omni(void **state)
 	assert_true(c.vel_limit_t_mm_s == 800.0);
 	assert_true(c.vel_default_r_deg_s == 60.0);
 	assert_true(c.caution_vel_t_mm_s == 150.0);
+	for (int i = 0; i < 4; i++)
+		assert_true(c.drive_lag_ms[i] == 20.0);
 	assert_int_equal(c.num_io, 8);
 }
 
@@ -222,6 +226,7 @@ static void error_out_of_range(void **state)
 {
 	(void)state;
 	VEH_ERR("bad_range.xml", ":1: vehicle.tick_hz: out of range '20000' (allowed 100..10000)");
+	VEH_ERR("bad_lag.xml", ":2: drives.axis1_lag_ms: out of range '1500' (allowed 0..1000)");
 	VEH_ERR("bad_zero_limit.xml",
 		":2: limits.vel_t_mm_s: out of range '0' (allowed >0..10000)");
 	IO_ERR("io_width.xml", ":2: input.width: out of range '33' (allowed 1..32)");

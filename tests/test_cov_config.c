@@ -145,6 +145,12 @@ static expect_t mutate(int i, vs_config_t *c)
 	case 39:
 		c->io[3].id = c->io[0].id;
 		return (expect_t){-3, "io.id"};
+	case 40:
+		c->drive_lag_ms[3] = 1000.5;
+		return (expect_t){-1, "drive_lag_ms"};
+	case 41:
+		c->drive_lag_ms[0] = -0.5;
+		return (expect_t){-1, "drive_lag_ms"};
 	default:
 		return (expect_t){0, NULL};
 	}
@@ -170,7 +176,7 @@ static void test_each_rule(void **state)
 		assert_non_null(field);
 		assert_string_equal(field, e.field);
 	}
-	assert_int_equal(i, 40);
+	assert_int_equal(i, 42);
 }
 
 static void test_range_ends_accepted(void **state)
@@ -185,6 +191,8 @@ static void test_range_ends_accepted(void **state)
 	c.battery_low_v = 1000.0;
 	c.joystick_deadband = 0.5;
 	c.cruise_blend_mm = 0.0;
+	c.drive_lag_ms[0] = 0.0;
+	c.drive_lag_ms[1] = 1000.0;
 	c.firmware_version = "0123456789012345678901234567890"; /* 31 characters */
 	c.num_io = VS_MAX_IO;
 	for (unsigned i = 0; i < VS_MAX_IO; i++) {

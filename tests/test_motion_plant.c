@@ -69,12 +69,14 @@ static void exec_ok(rig_t *r, const char *line, const char *want)
 
 /* Starts the firmware on the ideal plant with cfg, powered and servoed,
  * at the set speeds used throughout, with an empty trace. */
-static void rig_start(rig_t *r, const vs_config_t *cfg)
+static void rig_start(rig_t *r, const vs_config_t *cfg_in)
 {
 	plant_params_t pp;
+	vs_config_t cfg = *cfg_in;
 	plant_params_ideal(&pp);
+	plant_config_lag(&pp, &cfg);
 	const char *bad = NULL;
-	if (sim_init_ex(&r->sim, cfg, &pp, &bad) != 0)
+	if (sim_init_ex(&r->sim, &cfg, &pp, &bad) != 0)
 		fail_msg("configuration refused: %s", bad ? bad : "?");
 	sim_set_tick_cb(&r->sim, on_tick, r);
 	exec_ok(r, "setPower true", "ok true");

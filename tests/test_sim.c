@@ -34,6 +34,7 @@ static void start(bool ideal)
 	if (ideal) {
 		plant_params_ideal(&pp);
 		cfg.encoder_counts_per_rev = PLANT_HIRES_COUNTS_PER_REV;
+		plant_config_lag(&pp, &cfg);
 	} else {
 		plant_params_default(&pp);
 	}

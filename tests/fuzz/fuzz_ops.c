@@ -430,6 +430,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 		cfg.wheel_base_mm = 400.0;
 	}
 	plant_params_ideal(&pp);
+	plant_config_lag(&pp, &cfg);
 	if (sim_init(&S, &cfg, &pp) != 0)
 		abort();
 	armed = false;

@@ -69,9 +69,10 @@ int _write(int fd, const char *buf, int n)
 }
 
 /* ARM semihosting SYS_EXIT: QEMU (-semihosting) ends with status 0 for
- * ADP_Stopped_ApplicationExit, 1 otherwise. */
+ * ADP_Stopped_ApplicationExit, 1 otherwise. Kept through link-time
+ * optimisation: libc's exit calls it from outside the optimised code. */
 void _exit(int code);
-void _exit(int code)
+__attribute__((used)) void _exit(int code)
 {
 	register uint32_t r0 __asm("r0") = 0x18u;
 	register uint32_t r1 __asm("r1") = code == 0 ? 0x20026u : 0x20023u;

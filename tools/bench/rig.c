@@ -22,6 +22,9 @@ void rig_init(rig_t *r)
 	vs_config_defaults(&r->cfg);
 	/* Scenarios run without a host: no link watchdog. */
 	r->cfg.link_timeout_ms = 0;
+	/* The loopback's drives follow their setpoints at once. */
+	for (unsigned i = 0; i < VS_MAX_AXES; i++)
+		r->cfg.drive_lag_ms[i] = 0.0;
 	loop_hal_init(&r->plant, r->cfg.tick_hz);
 	r->hal = (vs_hal_t){&loop_hal_ops, &r->plant};
 	if (vehicle_init(&r->v, &r->cfg, &r->hal, &bad) != 0) {
