@@ -24,26 +24,27 @@ typedef struct {
 
 /* Warning codes: why a command was refused, or a soft condition. */
 enum {
-	ALM_W_BAD_ARGUMENT = 110,  /* not finite, or out of range */
-	ALM_W_OVER_LIMIT = 111,	   /* velocity/acceleration over the limit or <= 0 */
-	ALM_W_KINEMATICS = 112,	   /* motion this base cannot make (y on differential) */
-	ALM_W_NOT_READY = 120,	   /* Ready-only command while not idle with servo on */
-	ALM_W_SERVO_OFF = 121,	   /* Servo-on command with servo off */
-	ALM_W_MOVING = 122,	   /* refused while moving (setAcceleration, busy mode) */
-	ALM_W_FAULT_ACTIVE = 123,  /* motion refused: a fault is active */
-	ALM_W_LOCKED = 124,	   /* motion refused: contact lock */
-	ALM_W_QUEUE_FULL = 125,	   /* motion queue full */
-	ALM_W_BAD_IOID = 126,	   /* unknown or reserved io id */
-	ALM_W_BAD_AXIS = 127,	   /* unknown axis id */
-	ALM_W_POWER_OFF = 128,	   /* setServo with main power off */
-	ALM_W_PAUSED = 129,	   /* jog refused while paused */
-	ALM_W_STUCK = 130,	   /* motion refused: obstacle present */
-	ALM_W_JOYSTICK = 131,	   /* motion refused: joystick in use */
-	ALM_W_BATTERY_LOW = 140,   /* battery below the low threshold */
-	ALM_W_CONTACT = 150,	   /* contact sensor tripped: unit Locked */
-	ALM_W_OBSTACLE = 151,	   /* obstacle input tripped: unit Stuck */
-	ALM_W_JOYSTICK_LOST = 152, /* joystick lost while in use: stopped */
-	ALM_W_LINK_LOST = 153,	   /* no request within link_timeout_ms: stopped */
+	ALM_W_BAD_ARGUMENT = 110,    /* not finite, or out of range */
+	ALM_W_OVER_LIMIT = 111,	     /* velocity/acceleration over the limit or <= 0 */
+	ALM_W_KINEMATICS = 112,	     /* motion this base cannot make (y on differential) */
+	ALM_W_NOT_READY = 120,	     /* Ready-only command while not idle with servo on */
+	ALM_W_SERVO_OFF = 121,	     /* Servo-on command with servo off */
+	ALM_W_MOVING = 122,	     /* refused while moving (setAcceleration, busy mode) */
+	ALM_W_FAULT_ACTIVE = 123,    /* motion refused: a fault is active */
+	ALM_W_LOCKED = 124,	     /* motion refused: contact lock */
+	ALM_W_QUEUE_FULL = 125,	     /* motion queue full */
+	ALM_W_BAD_IOID = 126,	     /* unknown or reserved io id */
+	ALM_W_BAD_AXIS = 127,	     /* unknown axis id */
+	ALM_W_POWER_OFF = 128,	     /* setServo with main power off */
+	ALM_W_PAUSED = 129,	     /* jog refused while paused */
+	ALM_W_STUCK = 130,	     /* motion refused: obstacle present */
+	ALM_W_JOYSTICK = 131,	     /* motion refused: joystick in use */
+	ALM_W_BATTERY_LOW = 140,     /* battery below the low threshold */
+	ALM_W_CONTACT = 150,	     /* contact sensor tripped: unit Locked */
+	ALM_W_OBSTACLE = 151,	     /* obstacle input tripped: unit Stuck */
+	ALM_W_JOYSTICK_LOST = 152,   /* joystick lost while in use: stopped */
+	ALM_W_LINK_LOST = 153,	     /* no request within link_timeout_ms: stopped */
+	ALM_W_NOT_IN_POSITION = 154, /* not settled settle_timeout_ms after the reference */
 };
 
 /* Fault codes. */

@@ -39,6 +39,9 @@ void vs_config_defaults(vs_config_t *c)
 	c->drive_timeout_ms = 50;
 	c->loop_late_ms = 20;
 	c->link_timeout_ms = 1000;
+	c->position_window_mm = 0.05;
+	c->position_window_ms = 20;
+	c->settle_timeout_ms = 1000;
 
 	c->cruise_blend_mm = 200.0;
 	c->caution_vel_t_mm_s = 200.0;
@@ -160,6 +163,12 @@ int vs_config_check(const vs_config_t *c, const char **field)
 		FAIL(-1, "loop_late_ms");
 	if (c->link_timeout_ms > 60000)
 		FAIL(-1, "link_timeout_ms");
+	if (!positive_upto(c->position_window_mm, 100.0))
+		FAIL(-1, "position_window_mm");
+	if (c->position_window_ms > 1000)
+		FAIL(-1, "position_window_ms");
+	if (c->settle_timeout_ms < 10 || c->settle_timeout_ms > 60000)
+		FAIL(-1, "settle_timeout_ms");
 
 	if (!in_range(c->cruise_blend_mm, 0.0, 10000.0))
 		FAIL(-1, "cruise_blend_mm");

@@ -62,6 +62,13 @@ typedef struct {
 	/* Link watchdog: motion stops when no valid request arrived on any link
 	 * for this long (warning 153). 0 = off. */
 	uint32_t link_timeout_ms;
+	/* In position (CiA 402's position window and window time): the motion
+	 * is done once the reference is at rest and every wheel has stayed
+	 * within position_window_mm of it (at least one encoder count) for
+	 * position_window_ms; a unit not in position settle_timeout_ms after its
+	 * reference stopped raises warning 154. */
+	double position_window_mm;
+	uint32_t position_window_ms, settle_timeout_ms;
 
 	/* Cruise blending: how far the curve may start before a waypoint. */
 	double cruise_blend_mm;

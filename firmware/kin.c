@@ -58,7 +58,7 @@ static int32_t sat32(int64_t v)
 /* One wheel of the position loop: the reference advances by travel
  * (counts, Q32), the measured step d (counts) is taken off, and the drive
  * gets the feed-forward speed plus kp times what is left. Returns the wheel's
- * |reference - measured| in whole counts. */
+ * |reference - measured| in counts (Q32). */
 static inline int64_t wheel_step(kin_t *k, uint8_t i, q32_t travel, int32_t d, int32_t *out_cps_q8)
 {
 	int64_t err_q32 = k->ref_counts_q32[i] + travel - (int64_t)d * FX_ONE;
@@ -69,7 +69,7 @@ static inline int64_t wheel_step(kin_t *k, uint8_t i, q32_t travel, int32_t d, i
 	int64_t ff_q8 = ((travel + lead) * (int64_t)k->p.tick_hz) >> 24;
 	int64_t fb_q8 = ((err_q32 >> 16) * k->p.kp_q16) >> 24;
 	*out_cps_q8 = sat32(ff_q8 + fb_q8);
-	return fx_abs64(err_q32) >> 32;
+	return fx_abs64(err_q32);
 }
 
 /* Encoder step since the last tick (wrap-safe) and its length in mm. */
@@ -82,7 +82,7 @@ static inline int32_t wheel_delta(kin_t *k, uint8_t i, const int32_t meas[], q32
 }
 
 void kin_step(kin_t *k, const fx_twist_t *body, const int32_t meas[], int32_t out_cps_q8[],
-	      fx_twist_t *measured_delta, int64_t *following_err_counts)
+	      fx_twist_t *measured_delta, int64_t *following_err_q32)
 {
 	q32_t mm[KIN_MAX_WHEELS];
 	int32_t d[KIN_MAX_WHEELS];
@@ -124,8 +124,8 @@ void kin_step(kin_t *k, const fx_twist_t *body, const int32_t meas[], int32_t ou
 			    (d[0] | d[1]) ? fx_mul((mm[1] - mm[0]) / 2, k->p.deg_per_mm) : 0;
 		}
 	}
-	if (following_err_counts)
-		*following_err_counts = worst;
+	if (following_err_q32)
+		*following_err_q32 = worst;
 }
 
 void odom_integrate(fx_pose_t *pose, const fx_twist_t *d, fx_trig_cache_t *tc)

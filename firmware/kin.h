@@ -80,9 +80,10 @@ void kin_sync(kin_t *k, const int32_t meas_counts[]);
 /* One tick of the wheel loop: advance the references by the body twist,
  * read the measured counts, return drive setpoints (counts/s, Q8) and the
  * measured body displacement since the previous call (for odometry).
- * following_err_counts (optional) receives the largest |ref - meas|. */
+ * following_err_q32 (optional) receives the largest |ref - meas|, counts
+ * in Q32. */
 void kin_step(kin_t *k, const fx_twist_t *body, const int32_t meas_counts[], int32_t out_cps_q8[],
-	      fx_twist_t *measured_delta, int64_t *following_err_counts);
+	      fx_twist_t *measured_delta, int64_t *following_err_q32);
 
 /* Integrate a body-frame displacement into a world pose (midpoint heading).
  * tc (optional) keeps the last heading's sine and cosine between calls. */

@@ -175,7 +175,7 @@ bool vehicle_move_gate(vehicle_t *v, const char *op, vehicle_gate_t gate)
 	if (v->joystick_on)
 		return vehicle_refuse(v, op, ALM_W_JOYSTICK);
 	if (gate == VEHICLE_GATE_READY &&
-	    (motion_is_paused(&v->motion) || motion_has_work(&v->motion)))
+	    (motion_is_paused(&v->motion) || motion_has_work(&v->motion) || !v->in_position))
 		return vehicle_refuse(v, op, ALM_W_NOT_READY);
 	/* A velocity command cannot be deferred until resume. */
 	if (gate == VEHICLE_GATE_JOG && motion_is_paused(&v->motion))
@@ -315,6 +315,11 @@ bool vs_getState(vehicle_t *v, int16_t *state, char msg[VS_STATE_MSG_MAX])
 	} else if (!v->powered) {
 		code = VS_STATE_UNPOWERED;
 		state_msg(v->state_msg, "Unpowered", NULL);
+	} else if (v->servo && !v->in_position) {
+		/* Braking for a lock, an obstacle or a pause, or settling: the
+		 * state that follows is reported once the wheels are in place. */
+		code = VS_STATE_BUSY;
+		state_msg(v->state_msg, "Busy", NULL);
 	} else if (v->locked) {
 		code = VS_STATE_LOCKED;
 		state_msg(v->state_msg, "Locked", NULL);
@@ -324,8 +329,7 @@ bool vs_getState(vehicle_t *v, int16_t *state, char msg[VS_STATE_MSG_MAX])
 	} else if (!v->servo) {
 		code = VS_STATE_POWERED;
 		state_msg(v->state_msg, "Powered", NULL);
-	} else if (motion_is_paused(&v->motion) && !motion_is_moving(&v->motion)) {
-		/* Paused once at rest; while decelerating to the hold it is Busy. */
+	} else if (motion_is_paused(&v->motion)) {
 		code = VS_STATE_PAUSED;
 		state_msg(v->state_msg, "Paused", NULL);
 	} else if (motion_has_work(&v->motion)) {
@@ -734,13 +738,57 @@ static void feed_joystick(vehicle_t *v)
 	motion_joystick_input(&v->motion, x, y, r, true);
 }
 
+/* "<what> <n> counts": the worst wheel's distance from its reference. */
+static COLD void counts_msg(char *s, const char *what, int64_t err_q32)
+{
+	int64_t n = err_q32 >> 32;
+	size_t pos = put_str(s, VS_ALARM_SOURCE_MAX, 0, what);
+	pos = put_dec(s, VS_ALARM_SOURCE_MAX, pos, (uint32_t)(n > UINT32_MAX ? UINT32_MAX : n), 1);
+	put_str(s, VS_ALARM_SOURCE_MAX, pos, " counts");
+}
+
 static COLD void following_fault(vehicle_t *v, int64_t ferr)
 {
 	char s[VS_ALARM_SOURCE_MAX];
-	size_t pos = put_str(s, sizeof s, 0, "following error ");
-	pos = put_dec(s, sizeof s, pos, (uint32_t)(ferr > UINT32_MAX ? UINT32_MAX : ferr), 1);
-	put_str(s, sizeof s, pos, " counts");
+	counts_msg(s, "following error ", ferr);
 	raise_fault(v, ALM_F_FOLLOWING, s);
+}
+
+static COLD void settle_report(vehicle_t *v, int64_t ferr)
+{
+	char s[VS_ALARM_SOURCE_MAX];
+	counts_msg(s, "not in position: ", ferr);
+	alarm_raise(&v->alarms, ALM_W_NOT_IN_POSITION, s);
+	v->settle_reported = true;
+}
+
+/* In position (CiA 402's position window and window time): the reference
+ * at rest and every wheel within the window of it for the window time.
+ * Until then the motion is not done: the unit stays Busy, and Paused,
+ * Locked and Stuck wait for it too. A unit that does not get there within
+ * settle_timeout_ms of its reference stopping raises warning 154 once and
+ * is taken as done (it holds where it is). */
+static void supervise_position(vehicle_t *v, int64_t ferr)
+{
+	if (!v->servo || motion_is_moving(&v->motion)) {
+		/* Servo off: nothing to hold, and servo on starts from the
+		 * measured counts, in position. */
+		v->inpos_ticks = v->servo ? 0 : v->window_ticks;
+		v->settle_ticks = 0;
+		v->settle_reported = false;
+		v->in_position = !v->servo;
+		return;
+	}
+	if (ferr <= v->window_q32) {
+		v->settle_ticks = 0;
+		if (v->inpos_ticks < v->window_ticks)
+			v->inpos_ticks++;
+	} else {
+		v->inpos_ticks = 0;
+		if (++v->settle_ticks > v->settle_timeout_ticks && !v->settle_reported)
+			settle_report(v, ferr);
+	}
+	v->in_position = v->inpos_ticks >= v->window_ticks || v->settle_reported;
 }
 
 void vehicle_tick(vehicle_t *v, uint32_t now_us)
@@ -752,7 +800,10 @@ void vehicle_tick(vehicle_t *v, uint32_t now_us)
 	feed_joystick(v);
 
 	fx_twist_t cmd;
-	motion_tick(&v->motion, &v->odom, &cmd);
+	/* At rest the reference stays where the motion ended and the wheel
+	 * loop holds the unit there: one owner of where the unit is. Only with
+	 * the servo off (wheels free) does it follow the odometry. */
+	motion_tick(&v->motion, v->servo ? NULL : &v->odom, &cmd);
 	if (!v->servo) {
 		/* Nothing may move with the servo off; the odometry still
 		 * follows wheels pushed by hand. */
@@ -765,8 +816,9 @@ void vehicle_tick(vehicle_t *v, uint32_t now_us)
 	kin_step(&v->kin, &cmd, v->meas_counts, v->wheel_cps_q8, &delta, &ferr);
 	odom_integrate(&v->odom, &delta, &v->odom_trig);
 
-	if (v->servo && ferr > v->following_err_max_counts)
+	if (v->servo && ferr > v->following_err_max_q32)
 		following_fault(v, ferr);
+	supervise_position(v, ferr);
 
 	for (uint8_t i = 0; i < v->naxes; i++) {
 		if (!v->servo)

@@ -173,8 +173,10 @@ struct vehicle {
 	/* Supervision limits, fixed point, derived from cfg at init. */
 	uint32_t period_us;
 	uint32_t drive_timeout_ticks, encoder_stuck_ticks;
-	int32_t encoder_stuck_cps_q8; /* commanded speed that must move the encoder */
-	int64_t following_err_max_counts;
+	int32_t encoder_stuck_cps_q8;  /* commanded speed that must move the encoder */
+	int64_t following_err_max_q32; /* counts (Q32) */
+	int64_t window_q32;	       /* position window, counts (Q32) */
+	uint32_t window_ticks, settle_timeout_ticks;
 	uint32_t battery_low_mv, battery_critical_mv;
 	q32_t caution_vel_t; /* mm/s, Q32 */
 	int32_t joystick_deadband_q15;
@@ -185,6 +187,9 @@ struct vehicle {
 	bool drive_timeout_reported[VS_MAX_AXES];
 	uint32_t encoder_still_ticks[VS_MAX_AXES];
 	uint32_t battery_mv;
+	/* In position: ticks within the window, ticks at rest out of it. */
+	uint32_t inpos_ticks, settle_ticks;
+	bool in_position, settle_reported;
 	char state_msg[VS_STATE_MSG_MAX];
 };
 

@@ -143,7 +143,15 @@ int vehicle_init(vehicle_t *v, const vs_config_t *cfg, const vs_hal_t *hal, cons
 	/* A speed that must move the encoder by 20 counts within the window:
 	 * well clear of quantisation, so a slow creep never trips it. */
 	v->encoder_stuck_cps_q8 = (int32_t)(20u * 256u * 1000u / cfg->encoder_stuck_ms);
-	v->following_err_max_counts = (int64_t)(cfg->following_error_mm * counts_per_mm + 0.5);
+	v->following_err_max_q32 = (int64_t)(cfg->following_error_mm * counts_per_mm + 0.5) << 32;
+	/* The window is at least one count: a wheel at rest may sit a count
+	 * off its reference in quantisation. */
+	double window = cfg->position_window_mm * counts_per_mm;
+	v->window_q32 = to_q32(window < 1.0 ? 1.0 : window);
+	v->window_ticks = ms_to_ticks(cfg->position_window_ms, cfg->tick_hz);
+	v->settle_timeout_ticks = ms_to_ticks(cfg->settle_timeout_ms, cfg->tick_hz);
+	v->in_position = true; /* servo off: nothing to settle */
+	v->inpos_ticks = v->window_ticks;
 	v->battery_low_mv = (uint32_t)(cfg->battery_low_v * 1000.0 + 0.5);
 	v->battery_critical_mv = (uint32_t)(cfg->battery_critical_v * 1000.0 + 0.5);
 	v->battery_low_armed = true;
@@ -256,6 +264,11 @@ bool vs_setPosition(vehicle_t *v, vs_position_t pos)
 	fx_pose_t p = pose_q32(&pos);
 	p.th_deg = fx_wrap_deg(p.th_deg);
 	v->odom = p;
+	/* At rest the new pose is where the unit is now: the wheel loop drops
+	 * what it still had to correct, so that the reference, the odometry
+	 * and the wheels agree (a move sent next starts from p exactly). */
+	if (!motion_has_work(&v->motion))
+		kin_sync(&v->kin, v->meas_counts);
 	motion_set_pose(&v->motion, &p);
 	return true;
 }

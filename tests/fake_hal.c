@@ -164,3 +164,10 @@ void fake_run(fake_hal_t *f, vehicle_t *v, unsigned n)
 		vehicle_tick(v, f->now_us);
 	}
 }
+
+void fake_hal_config(vs_config_t *c)
+{
+	vs_config_defaults(c);
+	for (unsigned i = 0; i < VS_MAX_AXES; i++)
+		c->drive_lag_ms[i] = 0.0;
+}

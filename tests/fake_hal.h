@@ -54,6 +54,9 @@ extern const vs_hal_ops_t fake_hal_ops;
 /* Everything idle, battery 24.0 V, relay open, joystick present. */
 void fake_hal_init(fake_hal_t *f, uint32_t tick_hz);
 vs_hal_t fake_hal_bind(fake_hal_t *f);
+/* The reference configuration for this drive, which follows its setpoint
+ * at once: no drive lag for the wheel loop to lead. */
+void fake_hal_config(vs_config_t *c);
 /* Runs n control ticks, the clock advancing one period each. */
 void fake_run(fake_hal_t *f, vehicle_t *v, unsigned n);
 /* Period of the configured tick, microseconds. */

@@ -41,7 +41,7 @@ static int setup(void **state)
 	const char *bad = NULL;
 
 	(void)state;
-	vs_config_defaults(&cfg);
+	fake_hal_config(&cfg);
 	fake_hal_init(&fh, cfg.tick_hz);
 	hal = fake_hal_bind(&fh);
 	memset(&veh, 0, sizeof(veh));

@@ -179,7 +179,7 @@ static void test_kin_step_omni(void **state)
 	assert_int_equal(moved.vy_pt, FX_ONE);
 	assert_int_equal(moved.w_pt, 0);
 	kin_step(&k, &side, now, out, &moved, &ferr);
-	assert_int_equal(ferr, 1);
+	assert_int_equal(ferr, FX_ONE); /* one count, Q32 */
 	assert_int_equal(moved.vy_pt, 0);
 }
 

@@ -142,6 +142,21 @@ static unsigned expect_decel(double acc, unsigned max_ticks)
 	return n;
 }
 
+/* The reference has stopped: the unit is Busy until every wheel has been
+ * within the position window (0.05 mm) for the window time (20 ms), which
+ * takes at most 50 ms on the default plant. Returns the ticks it took. */
+static unsigned settles(void)
+{
+	unsigned n = 0;
+	EXPECT("getState", "ok true 17 \"Busy\"");
+	while (strcmp(ex("getState"), "ok true 17 \"Busy\"") == 0 && n < 1000) {
+		sim_tick(&S);
+		n++;
+	}
+	assert_in_range(n, 19, 50); /* from the tick after the last reference step */
+	return n;
+}
+
 /* The unit stays where it is for ms: odometry and the true plant pose move
  * by less than 1 mm (the wheel loop only settles the last counts). */
 static void stays_put(uint32_t ms)
@@ -546,6 +561,8 @@ static void test_contact_sensor(void **state)
 	/* 500 mm/s at 1000 mm/s^2: 500 ticks */
 	assert_in_range(expect_decel(ACC_LIMIT, 2000), 500, 501);
 	EXPECT("getActiveAlarm 16", "ok true 1 1 150 warning \"contact detected\"");
+	/* Locked once stopped (spec: stop, then enter Locked) */
+	settles();
 	EXPECT("getState", "ok true 23 \"Locked\"");
 	servo_is("true");
 	assert_true(S.plant.relay_closed);
@@ -581,6 +598,7 @@ static void test_obstacle_input(void **state)
 	EXPECT("$sim obstacle on", "ok obstacle on");
 	assert_in_range(expect_decel(ACC_LIMIT, 2000), 500, 501);
 	EXPECT("getActiveAlarm 16", "ok true 1 1 151 warning \"obstacle detected\"");
+	settles();
 	EXPECT("getState", "ok true 20 \"Stuck\"");
 	servo_is("true");
 	stays_put(1000);
@@ -620,6 +638,7 @@ static void test_link_loss_during_jog(void **state)
 	/* 300 mm/s at 500 mm/s^2: 600 ticks */
 	assert_in_range(expect_decel(ACC_SET, 2000), 600, 601);
 	EXPECT("getActiveAlarm 0", "ok true 0 0");
+	settles();
 	EXPECT("getState", "ok true 16 \"Ready\"");
 	servo_is("true");
 	stays_put(1000);
@@ -810,6 +829,7 @@ static void test_joystick_lost(void **state)
 	EXPECT("$sim joystick lost", "ok joystick lost");
 	assert_in_range(expect_decel(ACC_LIMIT, 2000), 500, 501);
 	EXPECT("getActiveAlarm 16", "ok true 1 1 152 warning \"joystick lost\"");
+	settles();
 	EXPECT("getState", "ok true 18 \"Warning-152\"");
 	servo_is("true");
 	/* the joystick comes back: it is off now and cannot move the unit */

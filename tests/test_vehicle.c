@@ -24,7 +24,7 @@ static int setup(void **state)
 {
 	(void)state;
 	fake_hal_init(&F, 1000);
-	vs_config_defaults(&C);
+	fake_hal_config(&C);
 	/* Time passes in lockstep waits with no request; the link watchdog
 	 * has its own tests. */
 	C.link_timeout_ms = 0;

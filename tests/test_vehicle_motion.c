@@ -22,7 +22,7 @@ static int setup(void **state)
 {
 	(void)state;
 	fake_hal_init(&F, 1000);
-	vs_config_defaults(&C);
+	fake_hal_config(&C);
 	/* Time passes in lockstep waits with no request; the link watchdog
 	 * has its own tests. */
 	C.link_timeout_ms = 0;
@@ -246,9 +246,12 @@ static void test_contact_locks_while_moving(void **state)
 	fake_run(&F, &V, 800);
 	F.contact = true;
 	fake_run(&F, &V, 1);
-	expect_state(VS_STATE_LOCKED, "Locked");
+	/* braking: Busy; Locked once stopped and in position */
+	expect_state(VS_STATE_BUSY, "Busy");
 	assert_int_equal(motion_queue_len(&V.motion), 0);
 	run_until_idle(5000);
+	fake_run(&F, &V, 30);
+	expect_state(VS_STATE_LOCKED, "Locked");
 	fake_run(&F, &V, 300);
 	double x = pos().x;
 	assert_true(vs_unlock(&V));
@@ -266,9 +269,10 @@ static void test_obstacle_stuck_while_moving(void **state)
 	fake_run(&F, &V, 800);
 	F.obstacle = true;
 	fake_run(&F, &V, 1);
-	expect_state(VS_STATE_STUCK, "Stuck");
+	expect_state(VS_STATE_BUSY, "Busy");
 	run_until_idle(5000);
 	fake_run(&F, &V, 300);
+	expect_state(VS_STATE_STUCK, "Stuck");
 	double x = pos().x;
 	F.obstacle = false;
 	fake_run(&F, &V, 1000);
