@@ -792,9 +792,10 @@ def main():
                 b = args[0]
                 if not isinstance(b, Board):
                     return
-                b.drain()
-                print("  then: %s | %s | %s" % (b.ex("getActiveAlarm 32767"), b.ex("$diag"),
-                                                b.costs()))
+                left = b.drain()
+                print("  then: %d bytes late (%r) | %s | %s | %s | %s"
+                      % (len(left), left[:80], b.ex("getActiveAlarm 32767"), b.ex("$diag"),
+                         b.ex("$link"), b.costs()))
             except Exception as e2:
                 print("  no state after it: %s" % e2)
 

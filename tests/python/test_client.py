@@ -11,7 +11,7 @@ import unittest
 import serial
 
 import vehicleservice as vs
-from simrig import Sim, vehiclectl
+from simrig import CONSOLE, FRAMES, Sim, vehiclectl
 
 
 def wait_idle(v):
@@ -76,18 +76,18 @@ class Client(unittest.TestCase):
             s.close()
 
     def sim(self):
-        s = Sim()
+        s = Sim(watchdog=False)
         self.sims.append(s)
         return s
 
     def test_table_matches_unit(self):
-        with vs.open_frames(self.sim().path) as v:
+        with vs.open_frames(self.sim().path, **FRAMES) as v:
             self.assertEqual(vs.table_crc(), 0x1F09)
             self.assertEqual(v.protocol_info(), (1, 0x1F09, 34, 24, 1108))
 
     def test_all_operations_frames_console_and_c_client(self):
         sf, sc = self.sim(), self.sim()
-        with vs.open_frames(sf.path) as v, vs.open_console(sc.path) as c:
+        with vs.open_frames(sf.path, **FRAMES) as v, vs.open_console(sc.path, **CONSOLE) as c:
             covered = {step[0] for step in SCRIPT if step != "wait"}
             self.assertEqual(covered, set(vs.OPERATIONS))
             res = {}
@@ -131,7 +131,7 @@ class Client(unittest.TestCase):
             rc, out = vehiclectl(sf.path, "getPosition")
             self.assertEqual(rc, 0)
             j = json.loads(out)
-            with vs.open_frames(sf.path) as v2:
+            with vs.open_frames(sf.path, **FRAMES) as v2:
                 p = v2.getPosition().value
                 self.assertTrue(close(tuple(float(j[k]) for k in ("x", "y", "theta")), tuple(p),
                                       0.05), "%r %r" % (j, p))
@@ -151,7 +151,7 @@ class Client(unittest.TestCase):
 
     def test_errors_naks_timeouts(self):
         s = self.sim()
-        with vs.open_frames(s.path) as v:
+        with vs.open_frames(s.path, **FRAMES) as v:
             t = v.transport
             with self.assertRaises(vs.NakError) as e:
                 t.exchange(0x55, b"")
@@ -164,7 +164,7 @@ class Client(unittest.TestCase):
             self.assertEqual(e.exception.status, 5)
             with self.assertRaises(ValueError):
                 v.setJogTimeout(40000)  # not a short: refused before sending
-        with vs.open_console(s.path) as c:
+        with vs.open_console(s.path, **CONSOLE) as c:
             with self.assertRaises(vs.ConsoleError) as e:
                 c.transport.command("moveForward 1 2")
             self.assertEqual(e.exception.code, 2)
