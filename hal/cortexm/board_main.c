@@ -48,15 +48,19 @@ static __attribute__((noinline)) uint32_t unit_init(void)
 
 /* The link, one received byte at a time, until a request has run or the
  * next period has begun: however many requests a host sends at once, a tick
- * waits for one of them at most. Unread bytes wait in the UART (a port
- * whose receiver can overrun buffers them by interrupt or DMA, see
- * docs/mcu.md). Returns the requests completed so far. */
+ * waits for one of them at most. A request is taken only once the last
+ * reply has gone to the UART: a host that sends faster than the line
+ * carries the answers waits, and no reply is cut short (50 $version lines
+ * in one write make 4 KiB of replies, four rings' worth). Unread bytes wait
+ * in the UART (a port whose receiver can overrun buffers them by interrupt
+ * or DMA, see docs/mcu.md). Returns the requests completed so far. */
 static uint32_t serve_link(uint32_t done, uint32_t now_ms, uint32_t seen)
 {
 	uint8_t b;
 	uint32_t r = seen;
 
-	while (r == seen && systick_count() == done && uart_link.read(NULL, &b, 1) == 1) {
+	while (r == seen && systick_count() == done && uart_tx_pending() == 0 &&
+	       uart_link.read(NULL, &b, 1) == 1) {
 		link_feed(&lnk, &b, 1, now_ms);
 		r = con.lines + lnk.fs.rx.st.frames;
 	}

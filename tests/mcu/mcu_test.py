@@ -624,7 +624,9 @@ REQUESTS = [
     "clearAlarm", "setServo true",
     # one refusal of each kind the board can raise: 12 warnings in the list
     "moveJog 0 100 0", "setVelocity 0 10", "moveLinearRel 1e12 0 0", "setOutput 0 1 1",
-    "getServoStatus 9", "moveForward 1000", "moveTurn 10", "setAcceleration 400 180",
+    # (a move long enough that no host delay lets it end before the
+    # refusals that need it running: 100 m at 500 mm/s)
+    "getServoStatus 9", "moveForward 100000", "moveTurn 10", "setAcceleration 400 180",
     "pause", "moveJog 100 0 0",
 ] + ["moveLinearAbs %d 0 0" % (100 * k) for k in range(17)] + [
     "stop", "setJoystick on", "moveForward 10", "setJoystick off", "setServo false",
