@@ -17,7 +17,11 @@
  *     <drives axis0_lag_ms="20" axis1_lag_ms="20" axis2_lag_ms="20" axis3_lag_ms="20"/>
  *               (each drive's speed lag, 0..1000 ms: firmware/kin.h)
  *     <supervision wheel_kp_per_s="20" following_error_mm="50" encoder_stuck_ms="300"
- *                  drive_timeout_ms="50"/>
+ *                  drive_timeout_ms="50" loop_late_ms="20" link_timeout_ms="1000"
+ *                  position_window_mm="0.05" position_window_ms="20"
+ *                  settle_timeout_ms="1000"/>
+ *               (in position, docs/console.md: window > 0..100 mm, 0..1000 ms;
+ *                settle 10..60000 ms)
  *     <motion cruise_blend_mm="200" caution_vel_t_mm_s="0"/>
  *     <battery low_v="22.0" critical_v="20.0"/>
  *     <devices contact_sensor="true" obstacle_input="true" estop="true" joystick="true"

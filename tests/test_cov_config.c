@@ -151,6 +151,18 @@ static expect_t mutate(int i, vs_config_t *c)
 	case 41:
 		c->drive_lag_ms[0] = -0.5;
 		return (expect_t){-1, "drive_lag_ms"};
+	case 42:
+		c->position_window_mm = 0.0;
+		return (expect_t){-1, "position_window_mm"};
+	case 43:
+		c->position_window_ms = 1001;
+		return (expect_t){-1, "position_window_ms"};
+	case 44:
+		c->settle_timeout_ms = 9;
+		return (expect_t){-1, "settle_timeout_ms"};
+	case 45:
+		c->settle_timeout_ms = 60001;
+		return (expect_t){-1, "settle_timeout_ms"};
 	default:
 		return (expect_t){0, NULL};
 	}
@@ -176,7 +188,7 @@ static void test_each_rule(void **state)
 		assert_non_null(field);
 		assert_string_equal(field, e.field);
 	}
-	assert_int_equal(i, 42);
+	assert_int_equal(i, 46);
 }
 
 static void test_range_ends_accepted(void **state)
@@ -193,6 +205,9 @@ static void test_range_ends_accepted(void **state)
 	c.cruise_blend_mm = 0.0;
 	c.drive_lag_ms[0] = 0.0;
 	c.drive_lag_ms[1] = 1000.0;
+	c.position_window_mm = 100.0;
+	c.position_window_ms = 0;
+	c.settle_timeout_ms = 10;
 	c.firmware_version = "0123456789012345678901234567890"; /* 31 characters */
 	c.num_io = VS_MAX_IO;
 	for (unsigned i = 0; i < VS_MAX_IO; i++) {

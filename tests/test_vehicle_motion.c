@@ -108,6 +108,67 @@ static void test_forward_busy_ready(void **state)
 	assert_int_equal(alarm_count(), 0);
 }
 
+/* In position: after the reference's last step the unit stays Busy, and
+ * Ready-only moves are refused, until every wheel has been within the
+ * window (0.05 mm) for the window time (20 ms = 20 ticks): on this drive,
+ * which follows at once, the wheels are there with the reference. */
+static void test_ready_after_the_window_time(void **state)
+{
+	(void)state;
+	assert_true(vs_moveForward(&V, 100.0));
+	unsigned n = run_until_idle(10000);
+	assert_true(n < 10000);
+	/* the last reference tick was the window's first */
+	for (unsigned k = 1; k < 19; k++) {
+		expect_state(VS_STATE_BUSY, "Busy");
+		fake_run(&F, &V, 1);
+	}
+	assert_false(vs_moveForward(&V, 10.0));
+	expect_newest(120, VS_ALARM_WARNING, "moveForward refused: unit not ready");
+	assert_true(vs_clearAlarm(&V));
+	fake_run(&F, &V, 1);
+	expect_state(VS_STATE_READY, "Ready");
+	assert_true(fabs(pos().x - 100.0) <= 0.05); /* the window */
+}
+
+/* A wheel that does not reach its reference (its encoder stops 1 mm before
+ * the end, far below the following-error limit): Busy until
+ * settle_timeout_ms after the reference stopped (100 ms here: below the
+ * 300 ms after which a wheel commanded to move and not moving is fault
+ * 203), then warning 154 once; the wheel freed, it settles and the unit
+ * takes new work. */
+static void test_not_in_position_warns(void **state)
+{
+	(void)state;
+	C.settle_timeout_ms = 100;
+	vs_hal_t h = fake_hal_bind(&F);
+	assert_int_equal(vehicle_init(&V, &C, &h, NULL), 0);
+	assert_true(vs_setPower(&V, true) && vs_setServo(&V, true));
+	assert_true(vs_moveForward(&V, 100.0));
+	while (pos().x < 99.0)
+		fake_run(&F, &V, 1);
+	F.frozen[0] = true;
+	assert_true(run_until_idle(10000) < 10000);
+	fake_run(&F, &V, 99);
+	expect_state(VS_STATE_BUSY, "Busy");
+	assert_int_equal(alarm_count(), 0);
+	fake_run(&F, &V, 1);
+	expect_state(VS_STATE_WARNING, "Warning-154");
+	vs_alarm_t a[1];
+	int16_t n = 0;
+	uint16_t len = 0;
+	assert_true(vs_getActiveAlarm(&V, 1, &n, a, &len));
+	assert_int_equal(a[0].code, 154);
+	assert_memory_equal(a[0].source, "not in position: ", 17);
+	fake_run(&F, &V, 100);
+	assert_int_equal(alarm_count(), 1); /* once */
+	F.frozen[0] = false;
+	fake_run(&F, &V, 500);			    /* kp 20/s: 1 mm to well under a count */
+	assert_true(fabs(pos().x - 100.0) <= 0.05); /* the window */
+	assert_true(vs_moveForward(&V, -50.0));
+	assert_int_equal(alarm_count(), 1);
+}
+
 static void test_turn(void **state)
 {
 	(void)state;
@@ -364,6 +425,8 @@ int main(void)
 	    T(test_pause_while_moving),
 	    T(test_stop_discards),
 	    T(test_fault_halts_and_does_not_restart),
+	    T(test_ready_after_the_window_time),
+	    T(test_not_in_position_warns),
 	    T(test_contact_locks_while_moving),
 	    T(test_obstacle_stuck_while_moving),
 	    T(test_queue_full),
