@@ -27,6 +27,20 @@ void plant_params_ideal(plant_params_t *p)
 	p->current_limit_a = 0.0;
 }
 
+uint32_t plant_hires_counts_per_rev(const vs_config_t *cfg)
+{
+	/* The firmware's own check is the bound, so the two cannot disagree. */
+	vs_config_t c = *cfg;
+	for (uint32_t r = PLANT_HIRES_COUNTS_PER_REV; r > cfg->encoder_counts_per_rev; r >>= 1) {
+		const char *bad = NULL;
+		c.encoder_counts_per_rev = r;
+		if (vs_config_check(&c, &bad) == 0 || !bad ||
+		    strcmp(bad, "encoder_counts_per_rev") != 0)
+			return r;
+	}
+	return cfg->encoder_counts_per_rev;
+}
+
 static int io_index(const plant_t *pl, uint32_t id)
 {
 	if (id == 0)

@@ -51,6 +51,12 @@ void plant_params_ideal(plant_params_t *p);
  * firmware converts counts with it. Fits the HAL's Q8 setpoint range with
  * the reference limits. */
 #define PLANT_HIRES_COUNTS_PER_REV (1u << 20)
+/* The fine resolution for cfg: the largest power of two up to
+ * PLANT_HIRES_COUNTS_PER_REV whose fastest wheel setpoint vs_config_check
+ * admits (faster limits or smaller wheels need fewer counts), or cfg's own
+ * resolution when that is finer. A cfg rejected for another field gets
+ * PLANT_HIRES_COUNTS_PER_REV; vehicle_init then names that field. */
+uint32_t plant_hires_counts_per_rev(const vs_config_t *cfg);
 
 typedef struct {
 	double pos_counts; /* true wheel angle */
