@@ -379,6 +379,38 @@ bool plant_add_wall(plant_t *pl, double x0, double y0, double x1, double y1)
 	return true;
 }
 
+bool plant_push(plant_t *pl, double dx_mm, double dy_mm, double dth_deg)
+{
+	if (!(fabs(dx_mm) <= PLANT_PUSH_MAX_MM && fabs(dy_mm) <= PLANT_PUSH_MAX_MM &&
+	      fabs(dth_deg) <= PLANT_PUSH_MAX_DEG))
+		return false; /* also NaN */
+	double dth = dth_deg * M_PI / 180.0;
+	/* Body displacement of the steady twist whose arc ends at the push:
+	 * plant_step's chord relation solved for it. */
+	double h = dth / 2.0;
+	double k = fabs(h) > 1e-9 ? sin(h) / h : 1.0 - h * h / 6.0;
+	double vx = (dx_mm * cos(h) + dy_mm * sin(h)) / k;
+	double vy = (dy_mm * cos(h) - dx_mm * sin(h)) / k;
+	double r = dth * pl->half_mm;
+	double d[VS_MAX_AXES] = {0};
+	if (pl->cfg.kinematics == VS_KIN_OMNI) {
+		d[0] = vx - vy - r;
+		d[1] = vx + vy + r;
+		d[2] = vx + vy - r;
+		d[3] = vx - vy + r;
+	} else {
+		d[0] = vx - r; /* vy skids */
+		d[1] = vx + r;
+	}
+	for (uint8_t a = 0; a < pl->n; a++)
+		pl->w[a].pos_counts += d[a] * pl->counts_per_mm;
+	double c = cos(pl->th_rad), s = sin(pl->th_rad);
+	pl->x_mm += dx_mm * c - dy_mm * s;
+	pl->y_mm += dx_mm * s + dy_mm * c;
+	pl->th_rad += dth;
+	return true;
+}
+
 void plant_set_battery_ocv(plant_t *pl, double volts)
 {
 	pl->battery_ocv_v = volts;

@@ -134,6 +134,18 @@ bool plant_set_input(plant_t *pl, uint32_t id, uint32_t value);
 bool plant_wire(plant_t *pl, uint32_t out_id, uint32_t in_id);
 bool plant_add_wall(plant_t *pl, double x0, double y0, double x1, double y1);
 void plant_set_battery_ocv(plant_t *pl, double volts);
+/* An external force moves the base, at once, by (dx_mm, dy_mm) in its own
+ * frame at the start of the push (x forward, y to the left) and turns it by
+ * dth_deg counter-clockwise. The wheels are back-driven as they would turn
+ * along the steady twist that ends there (the arc of plant_step), so the
+ * encoders count the push as the kinematics of kin.h relate it; wheel
+ * speeds are kept. A differential base cannot roll sideways: its wheels skid
+ * through the twist's lateral part and do not turn for it. False, and
+ * nothing moves, for a value that is not finite or beyond
+ * PLANT_PUSH_MAX_MM on either axis or PLANT_PUSH_MAX_DEG. */
+#define PLANT_PUSH_MAX_MM  1000.0
+#define PLANT_PUSH_MAX_DEG 180.0
+bool plant_push(plant_t *pl, double dx_mm, double dy_mm, double dth_deg);
 /* Joystick axes as fractions of full scale (clamped to +-1). */
 void plant_set_joystick(plant_t *pl, double x, double y, double r, bool present);
 

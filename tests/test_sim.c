@@ -127,6 +127,20 @@ static void sim_extras_replies(void **state)
 	expect("$sim pose", "ok pose 0.000 0.000 0.000");
 	expect("$sim pose 1", "error 8 usage: $sim pose");
 	expect("$sim teleport", "error 8 unknown command '$sim teleport'");
+	/* A push moves the truth in the base's frame; a wrong one moves nothing. */
+	expect("$sim push 100 0 90", "ok push 100.000 0.000 90.000");
+	expect("$sim push 0 50 0", "ok push 50.000 0.000 90.000"); /* left of +y is -x */
+	expect("$sim push 1 2", "error 8 usage: $sim push DX DY DTH (mm forward, mm left, deg "
+				"counter-clockwise, in the base's frame)");
+	expect("$sim push 1 2 3 4", "error 8 usage: $sim push DX DY DTH (mm forward, mm left, deg "
+				    "counter-clockwise, in the base's frame)");
+	expect("$sim push 1 x 3", "error 8 not a number 'x'");
+	expect("$sim push nan 0 0", "error 8 not a number 'nan'");
+	expect("$sim push 1e9 0 0", "error 8 a push moves at most 1000 mm along each axis and 180 "
+				    "deg");
+	expect("$sim push 0 0 -180.5", "error 8 a push moves at most 1000 mm along each axis and "
+				       "180 deg");
+	expect("$sim pose", "ok pose 50.000 0.000 90.000");
 	expect("$wait -5", "error 8 usage: $wait MS (0..3600000)");
 	expect("$wait 3600001", "error 8 usage: $wait MS (0..3600000)");
 	expect("$wait", "error 8 usage: $wait MS (0..3600000)");
