@@ -33,6 +33,20 @@ void plant_config_lag(const plant_params_t *p, vs_config_t *cfg)
 		cfg->drive_lag_ms[i] = p->tau_s * 1000.0;
 }
 
+uint32_t plant_hires_counts_per_rev(const vs_config_t *cfg)
+{
+	/* The firmware's own check is the bound, so the two cannot disagree. */
+	vs_config_t c = *cfg;
+	for (uint32_t r = PLANT_HIRES_COUNTS_PER_REV; r > cfg->encoder_counts_per_rev; r >>= 1) {
+		const char *bad = NULL;
+		c.encoder_counts_per_rev = r;
+		if (vs_config_check(&c, &bad) == 0 || !bad ||
+		    strcmp(bad, "encoder_counts_per_rev") != 0)
+			return r;
+	}
+	return cfg->encoder_counts_per_rev;
+}
+
 static int io_index(const plant_t *pl, uint32_t id)
 {
 	if (id == 0)
@@ -368,6 +382,38 @@ bool plant_add_wall(plant_t *pl, double x0, double y0, double x1, double y1)
 		return false;
 	pl->walls[pl->num_walls++] =
 	    (plant_wall_t){fmin(x0, x1), fmin(y0, y1), fmax(x0, x1), fmax(y0, y1)};
+	return true;
+}
+
+bool plant_push(plant_t *pl, double dx_mm, double dy_mm, double dth_deg)
+{
+	if (!(fabs(dx_mm) <= PLANT_PUSH_MAX_MM && fabs(dy_mm) <= PLANT_PUSH_MAX_MM &&
+	      fabs(dth_deg) <= PLANT_PUSH_MAX_DEG))
+		return false; /* also NaN */
+	double dth = dth_deg * M_PI / 180.0;
+	/* Body displacement of the steady twist whose arc ends at the push:
+	 * plant_step's chord relation solved for it. */
+	double h = dth / 2.0;
+	double k = fabs(h) > 1e-9 ? sin(h) / h : 1.0 - h * h / 6.0;
+	double vx = (dx_mm * cos(h) + dy_mm * sin(h)) / k;
+	double vy = (dy_mm * cos(h) - dx_mm * sin(h)) / k;
+	double r = dth * pl->half_mm;
+	double d[VS_MAX_AXES] = {0};
+	if (pl->cfg.kinematics == VS_KIN_OMNI) {
+		d[0] = vx - vy - r;
+		d[1] = vx + vy + r;
+		d[2] = vx + vy - r;
+		d[3] = vx - vy + r;
+	} else {
+		d[0] = vx - r; /* vy skids */
+		d[1] = vx + r;
+	}
+	for (uint8_t a = 0; a < pl->n; a++)
+		pl->w[a].pos_counts += d[a] * pl->counts_per_mm;
+	double c = cos(pl->th_rad), s = sin(pl->th_rad);
+	pl->x_mm += dx_mm * c - dy_mm * s;
+	pl->y_mm += dx_mm * s + dy_mm * c;
+	pl->th_rad += dth;
 	return true;
 }
 

@@ -55,6 +55,12 @@ void plant_config_lag(const plant_params_t *p, vs_config_t *cfg);
  * firmware converts counts with it. Fits the HAL's Q8 setpoint range with
  * the reference limits. */
 #define PLANT_HIRES_COUNTS_PER_REV (1u << 20)
+/* The fine resolution for cfg: the largest power of two up to
+ * PLANT_HIRES_COUNTS_PER_REV whose fastest wheel setpoint vs_config_check
+ * admits (faster limits or smaller wheels need fewer counts), or cfg's own
+ * resolution when that is finer. A cfg rejected for another field gets
+ * PLANT_HIRES_COUNTS_PER_REV; vehicle_init then names that field. */
+uint32_t plant_hires_counts_per_rev(const vs_config_t *cfg);
 
 typedef struct {
 	double pos_counts; /* true wheel angle */
@@ -132,6 +138,18 @@ bool plant_set_input(plant_t *pl, uint32_t id, uint32_t value);
 bool plant_wire(plant_t *pl, uint32_t out_id, uint32_t in_id);
 bool plant_add_wall(plant_t *pl, double x0, double y0, double x1, double y1);
 void plant_set_battery_ocv(plant_t *pl, double volts);
+/* An external force moves the base, at once, by (dx_mm, dy_mm) in its own
+ * frame at the start of the push (x forward, y to the left) and turns it by
+ * dth_deg counter-clockwise. The wheels are back-driven as they would turn
+ * along the steady twist that ends there (the arc of plant_step), so the
+ * encoders count the push as the kinematics of kin.h relate it; wheel
+ * speeds are kept. A differential base cannot roll sideways: its wheels skid
+ * through the twist's lateral part and do not turn for it. False, and
+ * nothing moves, for a value that is not finite or beyond
+ * PLANT_PUSH_MAX_MM on either axis or PLANT_PUSH_MAX_DEG. */
+#define PLANT_PUSH_MAX_MM  1000.0
+#define PLANT_PUSH_MAX_DEG 180.0
+bool plant_push(plant_t *pl, double dx_mm, double dy_mm, double dth_deg);
 /* Joystick axes as fractions of full scale (clamped to +-1). */
 void plant_set_joystick(plant_t *pl, double x, double y, double r, bool present);
 

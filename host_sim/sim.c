@@ -190,7 +190,7 @@ static bool cmd_sim(sim_t *s, int argc, char **argv, char *reply, size_t cap)
 	plant_t *pl = &s->plant;
 	if (argc < 2)
 		return ERR("usage: $sim contact|obstacle|caution|estop|joystick|relay|drive|"
-			   "battery|input|wire|wall|pose ...");
+			   "battery|input|wire|wall|pose|push ...");
 	const char *what = argv[1];
 
 	bool *flag = NULL;
@@ -275,6 +275,22 @@ static bool cmd_sim(sim_t *s, int argc, char **argv, char *reply, size_t cap)
 		if (!plant_add_wall(pl, c[0], c[1], c[2], c[3]))
 			return ERR("at most %d walls", PLANT_MAX_WALLS);
 		return reply_f(reply, cap, "ok wall %u", pl->num_walls);
+	}
+	if (!strcmp(what, "push")) {
+		double d[3];
+		if (argc != 5)
+			return ERR("usage: $sim push DX DY DTH (mm forward, mm left, deg "
+				   "counter-clockwise, in the base's frame)");
+		for (int i = 0; i < 3; i++)
+			if (!parse_double(argv[2 + i], &d[i]))
+				return ERR("not a number '%s'", argv[2 + i]);
+		if (!plant_push(pl, d[0], d[1], d[2]))
+			return ERR("a push moves at most %.0f mm along each axis and %.0f deg",
+				   PLANT_PUSH_MAX_MM, PLANT_PUSH_MAX_DEG);
+		double x, y, th;
+		plant_pose(pl, &x, &y, &th);
+		return reply_f(reply, cap, "ok push %.3f %.3f %.3f", no_neg_zero(x), no_neg_zero(y),
+			       no_neg_zero(th));
 	}
 	if (!strcmp(what, "pose")) {
 		if (argc != 2)

@@ -19,6 +19,13 @@
  *   $sim wire OUT IN|none          loop an output back to an input
  *   $sim wall X0 Y0 X1 Y1          add a wall (axis-aligned rectangle, mm)
  *   $sim pose                      true plant pose: "ok pose X Y THETA"
+ *   $sim push DX DY DTH            an external force moves the base at once:
+ *                                  DX mm forward, DY mm left, DTH deg
+ *                                  counter-clockwise, in its own frame (each
+ *                                  at most 1000 mm, 180 deg); the wheels turn
+ *                                  with it, a differential base's skid through
+ *                                  the sideways part; "ok push X Y THETA" (the
+ *                                  true pose after it)
  */
 #ifndef SIM_H
 #define SIM_H

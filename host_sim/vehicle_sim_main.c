@@ -268,8 +268,10 @@ static void usage(FILE *f)
 	      "                  (default: --realtime on a terminal, else --fast)\n"
 	      "  --trace FILE    CSV trace, one row per tick (columns: host_sim/trace.h)\n"
 	      "  --trace-every N one trace row every N ticks\n"
-	      "  --ideal         ideal plant: no motor lag, no acceleration/current limit,\n"
-	      "                  2^20-count encoders (overrides the configured resolution)\n"
+	      "  --ideal         ideal plant: no motor lag, no acceleration/current limit, and\n"
+	      "                  the finest power-of-two encoder resolution up to 2^20 counts\n"
+	      "                  that the configured speed limits admit (replaces a coarser\n"
+	      "                  configured one; the start-up line on stderr says which)\n"
 	      "  --can IFACE     serve the CAN link on SocketCAN interface IFACE (docs/can.md);\n"
 	      "                  implies --realtime, keeps running after stdin ends\n"
 	      "  --node N        CAN node id, 1..127 (default 1)\n"
@@ -421,7 +423,7 @@ int main(int argc, char **argv)
 		plant_params_ideal(&pp);
 		/* The firmware converts counts with the configured resolution, so
 		 * the fine encoder goes into the configuration too. */
-		cfg.encoder_counts_per_rev = PLANT_HIRES_COUNTS_PER_REV;
+		cfg.encoder_counts_per_rev = plant_hires_counts_per_rev(&cfg);
 		plant_config_lag(&pp, &cfg);
 	} else {
 		plant_params_default(&pp);
@@ -480,10 +482,13 @@ int main(int argc, char **argv)
 	sigaction(SIGTERM, &sa, NULL);
 	signal(SIGPIPE, SIG_IGN);
 
+	char plant_desc[64] = "";
+	if (ideal)
+		snprintf(plant_desc, sizeof(plant_desc), "ideal plant, %u-count encoders, ",
+			 (unsigned)cfg.encoder_counts_per_rev);
 	fprintf(stderr, "vehicle-sim: %s base, %u axes, %u Hz, %s%s mode (%s, %s)\n",
 		cfg.kinematics == VS_KIN_OMNI ? "mecanum" : "differential", vs_config_axes(&cfg),
-		cfg.tick_hz, ideal ? "ideal plant, " : "", realtime ? "realtime" : "fast",
-		config_path, io_path);
+		cfg.tick_hz, plant_desc, realtime ? "realtime" : "fast", config_path, io_path);
 
 	int rc = realtime ? run_realtime(a) : pty ? run_pty_fast(a) : run_fast(a);
 	if (a->can_on)

@@ -3,7 +3,8 @@
 #   make bench              every figure of docs/performance.md: tick cost
 #                           (callgrind; and on the Cortex-M4 image in QEMU
 #                           with -icount), accuracy against the double reference,
-#                           console/frame parse rates, 1 kHz loop lateness (60 s)
+#                           console/frame parse rates, 1 kHz loop lateness (60 s),
+#                           motion on the default plant (tools/bench/plantbench.c)
 #   make bench BENCH_QUICK=1  the same with a 5 s lateness run
 #
 # Built with the normal host flags (OPT, default -O2) into $(BUILD)/bench/.
@@ -11,7 +12,7 @@
 BENCH_DIR := $(BUILD)/bench
 BENCH_SECS := $(if $(filter 1,$(BENCH_QUICK)),5,60)
 BENCH_RIG := $(call objs,tools/bench/rig.c hal/cortexm/loop_hal.c)
-BENCH_PROGS := $(addprefix $(BENCH_DIR)/,tickcost accuracy parserate looplat)
+BENCH_PROGS := $(addprefix $(BENCH_DIR)/,tickcost accuracy parserate looplat plantbench)
 
 $(BENCH_DIR)/tickcost: $(call objs,tools/bench/tickcost.c tools/bench/scenario.c) $(BENCH_RIG) \
 	$(FW_LIB)
@@ -20,6 +21,8 @@ $(BENCH_DIR)/accuracy: $(call objs,tools/bench/accuracy.c tools/ref/ref_motion.c
 	$(FW_LIB)
 $(BENCH_DIR)/parserate: $(call objs,tools/bench/parserate.c) $(BENCH_RIG) $(PROTO_LIB) $(HOST_LIB) \
 	$(FW_LIB)
+$(BENCH_DIR)/plantbench: $(call objs,tools/bench/plantbench.c tools/bench/plantmetrics.c) \
+	$(HOST_LIBS)
 $(BENCH_PROGS):
 	@mkdir -p $(dir $@)
 	@$(if $(Q),echo "  LD      $@")
@@ -32,3 +35,10 @@ bench-mcu-image:
 
 bench: $(BENCH_PROGS) $(BUILD)/linkbench bench-mcu-image
 	$(Q)CC="$(CC)" OPT="$(OPT)" tools/bench/bench.sh $(BENCH_DIR) $(BENCH_SECS)
+
+# The motion figures' module is also a test's (tests/test_plantmetrics.c).
+$(BUILD)/tests/test_plantmetrics: $(BUILD)/obj/tests/test_plantmetrics.o \
+	$(call objs,tools/bench/plantmetrics.c) $(TEST_SUPPORT_LIB) $(HOST_LIBS)
+	@mkdir -p $(dir $@)
+	@$(if $(Q),echo "  LD      $@")
+	$(Q)$(CC) $(LDFLAGS) -o $@ $^ -lcmocka $(LDLIBS_HOST) -lutil

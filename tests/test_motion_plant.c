@@ -94,7 +94,7 @@ static int setup(void **state)
 	/* Time passes in lockstep waits with no request; the link watchdog
 	 * has its own tests. */
 	cfg.link_timeout_ms = 0;
-	cfg.encoder_counts_per_rev = PLANT_HIRES_COUNTS_PER_REV;
+	cfg.encoder_counts_per_rev = plant_hires_counts_per_rev(&cfg);
 	rig_start(r, &cfg);
 	*state = r;
 	return 0;
@@ -369,9 +369,9 @@ static void test_omni_base(void **state)
 	cfg.link_timeout_ms = 0;
 	cfg.kinematics = VS_KIN_OMNI;
 	cfg.wheel_base_mm = 350;
-	/* A quarter of the fine encoder: the mecanum wheel's fastest setpoint
+	/* Half the fine encoder (2^19): the mecanum wheel's fastest setpoint
 	 * must still fit the drive's counts/s range (vs_config_check). */
-	cfg.encoder_counts_per_rev = PLANT_HIRES_COUNTS_PER_REV / 4;
+	cfg.encoder_counts_per_rev = plant_hires_counts_per_rev(&cfg);
 	rig_start(r, &cfg);
 	exec_ok(r, "moveLinearRel 0 500 0", "ok true");
 	run_until_ready(r, 30000);

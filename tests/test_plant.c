@@ -405,6 +405,116 @@ static void mecanum_truth_pose(void **state)
 	assert_near(y, 0.0, 1e-9);
 }
 
+static void assert_pose(double x, double y, double th_rad)
+{
+	assert_near(pl.x_mm, x, 1e-9);
+	assert_near(pl.y_mm, y, 1e-9);
+	assert_near(pl.th_rad, th_rad, 1e-12);
+}
+
+/* A push moves the truth by exactly the push, in the base's frame, and
+ * turns the wheels by the travel of the steady twist that ends there. The
+ * reference base: 150 mm wheels, 16384 counts (34.7679 a mm), 200 mm half
+ * track (90 deg: 314.159 mm a wheel, 10922.667 counts). */
+static void push_differential(void **state)
+{
+	(void)state;
+	plant_params_t p;
+	plant_params_ideal(&p);
+	start(&p);
+	plant_set_pose(&pl, 100, 50, 90);
+	assert_true(plant_push(&pl, 100, 0, 0)); /* forward, heading +y */
+	assert_pose(100, 150, M_PI / 2);
+	assert_int_equal(counts(0), 3476); /* 3476.79 */
+	assert_int_equal(counts(1), 3476);
+	assert_true(plant_push(&pl, 0, 0, 90));
+	assert_pose(100, 150, M_PI);
+	assert_int_equal(counts(0), -7446); /* 3476.79 - 10922.67 */
+	assert_int_equal(counts(1), 14399);
+	/* Sideways the truth moves (to the left of heading 180: -y) and the
+	 * wheels skid. */
+	assert_true(plant_push(&pl, 0, 50, 0));
+	assert_pose(100, 100, M_PI);
+	assert_int_equal(counts(0), -7446);
+	assert_int_equal(counts(1), 14399);
+
+	/* 100 mm forward while turned 60 deg: the twist's forward part is
+	 * dx h / tan h = 90.690 mm (h = 30 deg), its rotation 209.440 mm a
+	 * wheel: -118.750 and 300.130 mm; its lateral -52.360 mm skids. */
+	start(&p);
+	assert_true(plant_push(&pl, 100, 0, 60));
+	assert_pose(100, 0, M_PI / 3);
+	assert_int_equal(counts(0), -4129);	/* -4128.68 */
+	assert_int_equal(counts(1), 10434);	/* 10434.88 */
+	assert_near(pl.w[0].vel_cps, 0.0, 0.0); /* the speeds stay */
+
+	/* Out of bounds or not a number: nothing moves. */
+	assert_false(plant_push(&pl, 1000.001, 0, 0));
+	assert_false(plant_push(&pl, 0, -1000.5, 0));
+	assert_false(plant_push(&pl, 0, 0, 180.01));
+	assert_false(plant_push(&pl, NAN, 0, 0));
+	assert_false(plant_push(&pl, 0, 0, INFINITY));
+	assert_pose(100, 0, M_PI / 3);
+	assert_int_equal(counts(0), -4129);
+	assert_int_equal(counts(1), 10434);
+	assert_true(plant_push(&pl, -1000, 1000, -180)); /* the bounds themselves */
+	assert_pose(100 - 1000 * cos(M_PI / 3) - 1000 * sin(M_PI / 3),
+		    -1000 * sin(M_PI / 3) + 1000 * cos(M_PI / 3), M_PI / 3 - M_PI);
+}
+
+/* Mecanum (the base of config/vehicle-omni.xml: 100 mm wheels, 8192
+ * counts, 26.0759 a mm, (L + T) / 2 = 425 mm): every part of a push rolls. */
+static void push_mecanum(void **state)
+{
+	(void)state;
+	plant_params_t p;
+	plant_params_ideal(&p);
+	vs_config_defaults(&cfg);
+	cfg.kinematics = VS_KIN_OMNI;
+	cfg.wheel_diameter_mm = 100;
+	cfg.track_width_mm = 450;
+	cfg.wheel_base_mm = 400;
+	cfg.encoder_counts_per_rev = 8192;
+	plant_init(&pl, &cfg, &p);
+	/* 100 mm to the left: fl -, fr +, rl +, rr - (kin.h), 2607.59 counts. */
+	assert_true(plant_push(&pl, 0, 100, 0));
+	assert_pose(0, 100, 0);
+	int32_t want1[4] = {-2608, 2607, 2607, -2608};
+	for (uint8_t a = 0; a < 4; a++)
+		assert_int_equal(counts(a), want1[a]);
+	/* 30 deg: 425 mm * pi / 6 = 222.529 mm a wheel, 5802.667 counts. */
+	plant_init(&pl, &cfg, &p);
+	assert_true(plant_push(&pl, 0, 0, 30));
+	assert_pose(0, 0, M_PI / 6);
+	int32_t want2[4] = {-5803, 5802, -5803, 5802};
+	for (uint8_t a = 0; a < 4; a++)
+		assert_int_equal(counts(a), want2[a]);
+	/* All three at heading 90: twist (110.795, 22.672) mm and 30 deg. */
+	plant_init(&pl, &cfg, &p);
+	plant_set_pose(&pl, 0, 0, 90);
+	assert_true(plant_push(&pl, 100, 50, 30));
+	assert_pose(-50, 100, M_PI / 2 + M_PI / 6);
+	int32_t want3[4] = {-3505, 9282, -2323, 8100}; /* -3504.79 9282.95 -2322.38 8100.54 */
+	for (uint8_t a = 0; a < 4; a++)
+		assert_int_equal(counts(a), want3[a]);
+
+	/* The same wheel travel driven by the motors over one step lands the
+	 * base where the push put it (plant_step's kinematics, the setpoints
+	 * rounded to 1/256 count). */
+	plant_t pushed = pl;
+	plant_init(&pl, &cfg, &p);
+	plant_set_pose(&pl, 0, 0, 90);
+	plant_power_set(&pl, true);
+	for (uint8_t a = 0; a < 4; a++) {
+		plant_drive_enable(&pl, a, true);
+		plant_drive_set_velocity(&pl, a, (int32_t)lround(pushed.w[a].pos_counts * 256.0));
+	}
+	plant_step(&pl, 1000000);
+	assert_near(pl.x_mm, pushed.x_mm, 1e-4);
+	assert_near(pl.y_mm, pushed.y_mm, 1e-4);
+	assert_near(pl.th_rad, pushed.th_rad, 1e-6);
+}
+
 static void contact_from_wall_and_injection(void **state)
 {
 	(void)state;
@@ -460,6 +570,8 @@ int main(void)
 	    cmocka_unit_test(drive_fault_hooks),
 	    cmocka_unit_test(differential_truth_pose),
 	    cmocka_unit_test(mecanum_truth_pose),
+	    cmocka_unit_test(push_differential),
+	    cmocka_unit_test(push_mecanum),
 	    cmocka_unit_test(contact_from_wall_and_injection),
 	    cmocka_unit_test(joystick_injection),
 	};

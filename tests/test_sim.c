@@ -11,9 +11,11 @@
 
 #include <cmocka.h>
 
+#include "hal/config_xml.h"
 #include "host_sim/sim.h"
 
 static sim_t sim;
+static char BUILD_DIR[512] = "build"; /* where vehicle-sim is: beside tests/ */
 
 static void expect(const char *line, const char *want)
 {
@@ -33,7 +35,7 @@ static void start(bool ideal)
 	cfg.link_timeout_ms = 0;
 	if (ideal) {
 		plant_params_ideal(&pp);
-		cfg.encoder_counts_per_rev = PLANT_HIRES_COUNTS_PER_REV;
+		cfg.encoder_counts_per_rev = plant_hires_counts_per_rev(&cfg);
 		plant_config_lag(&pp, &cfg);
 	} else {
 		plant_params_default(&pp);
@@ -126,6 +128,20 @@ static void sim_extras_replies(void **state)
 	expect("$sim pose", "ok pose 0.000 0.000 0.000");
 	expect("$sim pose 1", "error 8 usage: $sim pose");
 	expect("$sim teleport", "error 8 unknown command '$sim teleport'");
+	/* A push moves the truth in the base's frame; a wrong one moves nothing. */
+	expect("$sim push 100 0 90", "ok push 100.000 0.000 90.000");
+	expect("$sim push 0 50 0", "ok push 50.000 0.000 90.000"); /* left of +y is -x */
+	expect("$sim push 1 2", "error 8 usage: $sim push DX DY DTH (mm forward, mm left, deg "
+				"counter-clockwise, in the base's frame)");
+	expect("$sim push 1 2 3 4", "error 8 usage: $sim push DX DY DTH (mm forward, mm left, deg "
+				    "counter-clockwise, in the base's frame)");
+	expect("$sim push 1 x 3", "error 8 not a number 'x'");
+	expect("$sim push nan 0 0", "error 8 not a number 'nan'");
+	expect("$sim push 1e9 0 0", "error 8 a push moves at most 1000 mm along each axis and 180 "
+				    "deg");
+	expect("$sim push 0 0 -180.5", "error 8 a push moves at most 1000 mm along each axis and "
+				       "180 deg");
+	expect("$sim pose", "ok pose 50.000 0.000 90.000");
 	expect("$wait -5", "error 8 usage: $wait MS (0..3600000)");
 	expect("$wait 3600001", "error 8 usage: $wait MS (0..3600000)");
 	expect("$wait", "error 8 usage: $wait MS (0..3600000)");
@@ -238,6 +254,78 @@ static void tick_callback_and_trace(void **state)
 	free(buf);
 }
 
+/* The fine encoder is the finest power of two that vs_config_check admits:
+ * 2^20 on the reference base; the mecanum base's fastest wheel (800 mm/s
+ * along x and y plus 120 deg/s on a 425 mm lever, 2490 mm/s on 100 mm
+ * wheels) allows 2^19; a configured finer resolution stays. */
+static void hires_resolution_follows_the_limits(void **state)
+{
+	(void)state;
+	vs_config_t cfg;
+	char err[256];
+	vs_config_defaults(&cfg);
+	assert_int_equal(plant_hires_counts_per_rev(&cfg), 1u << 20);
+	assert_int_equal(
+	    config_load("config/vehicle-omni.xml", "config/io.xml", &cfg, NULL, err, sizeof(err)),
+	    0);
+	assert_int_equal(plant_hires_counts_per_rev(&cfg), 1u << 19);
+	cfg.vel_limit_t_mm_s = 1600; /* defaults stay below the limits */
+	assert_int_equal(plant_hires_counts_per_rev(&cfg), 1u << 18);
+	cfg.encoder_counts_per_rev = 300000; /* admitted, and finer than 2^18 */
+	assert_int_equal(plant_hires_counts_per_rev(&cfg), 300000);
+	/* Rejected for another field: the fine default, and init names the field. */
+	vs_config_defaults(&cfg);
+	cfg.tick_hz = 5;
+	assert_int_equal(plant_hires_counts_per_rev(&cfg), 1u << 20);
+}
+
+/* The mecanum base of config/vehicle-omni.xml on the ideal plant moves
+ * diagonally and turns to the exact pose, in-process and through
+ * vehicle-sim --ideal. */
+static void omni_config_on_ideal_plant(void **state)
+{
+	(void)state;
+	vs_config_t cfg;
+	plant_params_t pp;
+	char err[256];
+	assert_int_equal(
+	    config_load("config/vehicle-omni.xml", "config/io.xml", &cfg, NULL, err, sizeof(err)),
+	    0);
+	cfg.link_timeout_ms = 0;
+	plant_params_ideal(&pp);
+	cfg.encoder_counts_per_rev = plant_hires_counts_per_rev(&cfg);
+	plant_config_lag(&pp, &cfg);
+	assert_int_equal(sim_init(&sim, &cfg, &pp), 0);
+	expect("setPower true", "ok true");
+	expect("setServo true", "ok true");
+	expect("moveLinearRel 300 -200 0", "ok true");
+	expect("$wait 3000", "ok wait 3000");
+	expect("moveTurn 90", "ok true");
+	expect("$wait 3000", "ok wait 3000");
+	expect("getPosition", "ok true 300.000 -200.000 90.000");
+	expect("$sim pose", "ok pose 300.000 -200.000 90.000");
+	expect("getState", "ok true 16 \"Ready\"");
+
+	char cmd[1200], out[2048];
+	snprintf(cmd, sizeof(cmd),
+		 "printf '$watchdog 0\\nsetPower true\\nsetServo true\\nmoveLinearRel 300 -200 "
+		 "0\\n$wait 3000\\nmoveTurn 90\\n$wait 3000\\ngetPosition\\n' | %s/vehicle-sim "
+		 "--fast --ideal --config config/vehicle-omni.xml 2>&1",
+		 BUILD_DIR);
+	FILE *f = popen(cmd, "r");
+	assert_non_null(f);
+	size_t n = fread(out, 1, sizeof(out) - 1, f);
+	out[n] = '\0';
+	assert_int_equal(pclose(f), 0);
+	const char *want =
+	    "vehicle-sim: mecanum base, 4 axes, 1000 Hz, ideal plant, 524288-count encoders, fast "
+	    "mode (config/vehicle-omni.xml, config/io.xml)\n"
+	    "ok watchdog 0\nok true\nok true\nok true\nok wait 3000\nok true\nok wait 3000\n"
+	    "ok true 300.000 -200.000 90.000\n";
+	if (strcmp(out, want) != 0)
+		fail_msg("vehicle-sim printed:\n%s", out);
+}
+
 static void bad_config_rejected(void **state)
 {
 	(void)state;
@@ -252,7 +340,7 @@ static void bad_config_rejected(void **state)
 	assert_string_equal(bad, "tick_hz");
 }
 
-int main(void)
+int main(int argc, char **argv)
 {
 	const struct CMUnitTest tests[] = {
 	    cmocka_unit_test(move_forward_end_to_end),
@@ -263,6 +351,18 @@ int main(void)
 	    cmocka_unit_test(contact_with_wall_locks),
 	    cmocka_unit_test(tick_callback_and_trace),
 	    cmocka_unit_test(bad_config_rejected),
+	    cmocka_unit_test(hires_resolution_follows_the_limits),
+	    cmocka_unit_test(omni_config_on_ideal_plant),
 	};
+	/* build/tests/test_sim -> build */
+	if (argc > 0 && strrchr(argv[0], '/')) {
+		snprintf(BUILD_DIR, sizeof(BUILD_DIR), "%s", argv[0]);
+		*strrchr(BUILD_DIR, '/') = '\0';
+		char *up = strrchr(BUILD_DIR, '/');
+		if (up)
+			*up = '\0';
+		else
+			snprintf(BUILD_DIR, sizeof(BUILD_DIR), ".");
+	}
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

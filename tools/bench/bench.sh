@@ -47,6 +47,16 @@ awk '
 	}' "$dir/accuracy.txt"
 echo
 
+echo "== 2b. motion on the default plant: the whole firmware on host_sim's plant (20 ms motor lag, 3000 mm/s^2, 10 A a =="
+echo "  motor, the configured encoders) and on the ideal plant (no lag or limit, the finest encoders the limits admit);"
+echo "  per move from the origin: distance and heading to the target at the first Ready (odometry, true pose);"
+echo "  overshoot: largest true travel past the target along the last commanded direction (of travel, of rotation);"
+echo "  Ready, settle: ms from the reference's end to Ready, and until the true pose stays within 0.05 mm and"
+echo "  0.01 deg of the target with every wheel under 0.1 mm/s ('never': not by 500 ms after Ready); drift: true"
+echo "  pose change from Ready to 500 ms later; following: largest reference - odometry while Busy"
+"$dir/plantbench" | tee "$dir/plantbench.txt"
+echo
+
 echo "== 3. parse rates (wall clock, this machine, one core) =="
 "$dir/parserate"
 echo
