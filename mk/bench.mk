@@ -36,9 +36,10 @@ bench-mcu-image:
 bench: $(BENCH_PROGS) $(BUILD)/linkbench bench-mcu-image
 	$(Q)CC="$(CC)" OPT="$(OPT)" tools/bench/bench.sh $(BENCH_DIR) $(BENCH_SECS)
 
-# The motion figures' module is also a test's (tests/test_plantmetrics.c).
-$(BUILD)/tests/test_plantmetrics: $(BUILD)/obj/tests/test_plantmetrics.o \
-	$(call objs,tools/bench/plantmetrics.c) $(TEST_SUPPORT_LIB) $(HOST_LIBS)
+# The motion figures' module is also the tests' (tests/test_plantmetrics.c,
+# tests/test_fidelity.c).
+$(BUILD)/tests/test_plantmetrics $(BUILD)/tests/test_fidelity: $(BUILD)/tests/%: \
+	$(BUILD)/obj/tests/%.o $(call objs,tools/bench/plantmetrics.c) $(TEST_SUPPORT_LIB) $(HOST_LIBS)
 	@mkdir -p $(dir $@)
 	@$(if $(Q),echo "  LD      $@")
 	$(Q)$(CC) $(LDFLAGS) -o $@ $^ -lcmocka $(LDLIBS_HOST) -lutil

@@ -154,9 +154,9 @@ static void runner_on_the_ideal_plant(void **state)
 	assert_near(tr.s[tr.n - 1].t_s - tr.s[0].t_s + 0.001, r.ready_s + lim.drift_s);
 	assert_true(r.err_true_mm <= 0.05);
 
-	assert_int_equal(pm_run(move("stop 1 s into moveForward 1000"), &cfg, &pp, &lim, &tr, &from,
-				&r, &bad),
-			 PM_OK);
+	assert_int_equal(
+	    pm_run(move("stop 1 s into moveForward 1000"), &cfg, &pp, &lim, &tr, &from, &r, &bad),
+	    PM_OK);
 	assert_true(fabs(r.ref_end_s - 1.5) <= 0.002);
 	assert_true(fabs(r.target.x - 375.0) <= 1.0 && r.target.y == 0.0);
 
@@ -173,12 +173,13 @@ static void runner_on_the_ideal_plant(void **state)
 	static const char *const files[] = {"config/vehicle.xml", "config/vehicle-omni.xml"};
 	for (int f = 0; f < 2; f++) {
 		char err[256];
-		assert_int_equal(config_load(files[f], "config/io.xml", &cfg, NULL, err, sizeof(err)),
-				 0);
+		assert_int_equal(
+		    config_load(files[f], "config/io.xml", &cfg, NULL, err, sizeof(err)), 0);
 		ideal(&cfg, &pp);
 		for (size_t i = 0; i < pm_num_moves; i++) {
 			int rc = pm_run(&pm_moves[i], &cfg, &pp, &lim, &tr, &from, &r, &bad);
-			if (f == 1 && !strcmp(pm_moves[i].name, "moveForward 1000 at 1000 mm/s^2")) {
+			if (f == 1 &&
+			    !strcmp(pm_moves[i].name, "moveForward 1000 at 1000 mm/s^2")) {
 				assert_int_equal(rc, PM_REFUSED);
 				assert_string_equal(bad, "setAcceleration 1000 180");
 			} else if (rc != PM_OK) {

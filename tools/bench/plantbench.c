@@ -47,10 +47,11 @@ static int run_config(const char *path)
 	       (unsigned)cfg.encoder_counts_per_rev, (unsigned)fine.encoder_counts_per_rev,
 	       cfg.vel_default_t_mm_s, cfg.vel_default_r_deg_s, cfg.acc_default_t_mm_s2,
 	       cfg.acc_default_r_deg_s2);
-	printf("  %-42s %-7s %15s %15s  %15s  %6s %6s  %15s  %15s\n", "", "",
-	       "Ready: odometry", "true", "overshoot", "Ready", "settle", "drift", "following");
+	printf("  %-42s %-7s %15s %15s  %15s  %6s %6s  %15s  %15s\n", "", "", "Ready: odometry",
+	       "true", "overshoot", "Ready", "settle", "drift", "following");
 	printf("  %-42s %-7s %7s %7s %7s %7s  %7s %7s  %6s %6s  %7s %7s  %7s %7s\n", "move",
-	       "plant", "mm", "deg", "mm", "deg", "mm", "deg", "ms", "ms", "mm", "deg", "mm", "deg");
+	       "plant", "mm", "deg", "mm", "deg", "mm", "deg", "ms", "ms", "mm", "deg", "mm",
+	       "deg");
 	pm_trace_t tr;
 	pm_trace_init(&tr);
 	int rc = 0;
@@ -60,13 +61,13 @@ static int run_config(const char *path)
 			pm_result_t r;
 			size_t from;
 			const char *bad = NULL;
-			int res = pm_run(m, p ? &fine : &cfg, p ? &ideal : &def, &lim, &tr, &from, &r,
-					 &bad);
+			int res = pm_run(m, p ? &fine : &cfg, p ? &ideal : &def, &lim, &tr, &from,
+					 &r, &bad);
 			if (res == PM_OK) {
 				print_row(m->name, p ? "ideal" : "default", &r);
 			} else if (res == PM_REFUSED) {
-				printf("  %-42s %-7s refused: %s\n", m->name, p ? "ideal" : "default",
-				       bad ? bad : "?");
+				printf("  %-42s %-7s refused: %s\n", m->name,
+				       p ? "ideal" : "default", bad ? bad : "?");
 			} else {
 				printf("  %-42s %-7s no Ready within 120 s\n", m->name,
 				       p ? "ideal" : "default");

@@ -34,7 +34,8 @@ static void take(sim_t *s, pm_sample_t *o)
 	o->odom = fx_pose(&d.odom_pose);
 	plant_pose(pl, &o->truth.x, &o->truth.y, &o->truth.th);
 	double hz = (double)s->cfg.tick_hz;
-	double vx = (double)d.cmd_twist_pt.vx_pt / Q * hz, vy = (double)d.cmd_twist_pt.vy_pt / Q * hz;
+	double vx = (double)d.cmd_twist_pt.vx_pt / Q * hz,
+	       vy = (double)d.cmd_twist_pt.vy_pt / Q * hz;
 	double c = cos(o->ref.th * M_PI / 180.0), sn = sin(o->ref.th * M_PI / 180.0);
 	o->cmd_vx = vx * c - vy * sn;
 	o->cmd_vy = vx * sn + vy * c;
@@ -258,7 +259,7 @@ int pm_run(const pm_move_t *m, const vs_config_t *cfg, const plant_params_t *pp,
 	static const char *const start[] = {"setPower true", "setServo true", NULL};
 	static const char *const stop[] = {"stop", NULL};
 	vs_config_t c = *cfg;
-	c.link_timeout_ms = 0; /* no host polls the unit */
+	c.link_timeout_ms = 0;	  /* no host polls the unit */
 	plant_config_lag(pp, &c); /* the configuration names the drive it runs */
 	sim_t *s = calloc(1, sizeof(*s));
 	if (!s)

@@ -120,7 +120,7 @@ int pm_run(const pm_move_t *m, const vs_config_t *cfg, const plant_params_t *pp,
 /* The base pushed at rest (plant_push: its own frame, mm, mm, deg). */
 typedef struct {
 	pm_pose_t truth_before, odom_before;
-	pm_pose_t truth_pushed;		  /* right after the push */
+	pm_pose_t truth_pushed;		   /* right after the push */
 	pm_pose_t truth_after, odom_after; /* watch_ms later */
 	int16_t state_after;
 } pm_push_t;
