@@ -174,8 +174,8 @@ bool vehicle_move_gate(vehicle_t *v, const char *op, vehicle_gate_t gate)
 		return vehicle_refuse(v, op, ALM_W_SERVO_OFF);
 	if (v->joystick_on)
 		return vehicle_refuse(v, op, ALM_W_JOYSTICK);
-	if (gate == VEHICLE_GATE_READY &&
-	    (motion_is_paused(&v->motion) || motion_has_work(&v->motion) || !v->in_position))
+	if (gate == VEHICLE_GATE_READY && (motion_is_paused(&v->motion) ||
+					   motion_has_work(&v->motion) || !vehicle_in_position(v)))
 		return vehicle_refuse(v, op, ALM_W_NOT_READY);
 	/* A velocity command cannot be deferred until resume. */
 	if (gate == VEHICLE_GATE_JOG && motion_is_paused(&v->motion))
@@ -315,7 +315,7 @@ bool vs_getState(vehicle_t *v, int16_t *state, char msg[VS_STATE_MSG_MAX])
 	} else if (!v->powered) {
 		code = VS_STATE_UNPOWERED;
 		state_msg(v->state_msg, "Unpowered", NULL);
-	} else if (v->servo && !v->in_position) {
+	} else if (!vehicle_in_position(v)) {
 		/* Braking for a lock, an obstacle or a pause, or settling: the
 		 * state that follows is reported once the wheels are in place. */
 		code = VS_STATE_BUSY;
@@ -759,36 +759,44 @@ static COLD void settle_report(vehicle_t *v, int64_t ferr)
 	char s[VS_ALARM_SOURCE_MAX];
 	counts_msg(s, "not in position: ", ferr);
 	alarm_raise(&v->alarms, ALM_W_NOT_IN_POSITION, s);
-	v->settle_reported = true;
 }
 
 /* In position (CiA 402's position window and window time): the reference
  * at rest and every wheel within the window of it for the window time.
  * Until then the motion is not done: the unit stays Busy, and Paused,
  * Locked and Stuck wait for it too. A unit that does not get there within
- * settle_timeout_ms of its reference stopping raises warning 154 once and
- * is taken as done (it holds where it is). */
+ * settle_timeout_ms raises warning 154 once and is taken as done (it holds
+ * where it is). */
 static void supervise_position(vehicle_t *v, int64_t ferr)
 {
-	if (!v->servo || motion_is_moving(&v->motion)) {
-		/* Servo off: nothing to hold, and servo on starts from the
-		 * measured counts, in position. */
-		v->inpos_ticks = v->servo ? 0 : v->window_ticks;
+	/* The reference moved this tick (the command is its step; zero with
+	 * the servo off). */
+	if ((v->cmd.vx_pt | v->cmd.vy_pt | v->cmd.w_pt) != 0) {
+		v->inpos_ticks = 0;
 		v->settle_ticks = 0;
-		v->settle_reported = false;
-		v->in_position = !v->servo;
 		return;
 	}
-	if (ferr <= v->window_q32) {
+	if (!v->servo) {
+		/* Nothing to hold; servo on starts from the measured counts, in
+		 * position. */
+		v->inpos_ticks = v->window_ticks;
+		v->settle_ticks = 0;
+	} else if (ferr <= v->window_q32) {
 		v->settle_ticks = 0;
 		if (v->inpos_ticks < v->window_ticks)
 			v->inpos_ticks++;
 	} else {
 		v->inpos_ticks = 0;
-		if (++v->settle_ticks > v->settle_timeout_ticks && !v->settle_reported)
+		if (v->settle_ticks <= v->settle_timeout_ticks &&
+		    ++v->settle_ticks > v->settle_timeout_ticks)
 			settle_report(v, ferr);
 	}
-	v->in_position = v->inpos_ticks >= v->window_ticks || v->settle_reported;
+}
+
+bool vehicle_in_position(const vehicle_t *v)
+{
+	return !v->servo || v->inpos_ticks >= v->window_ticks ||
+	       v->settle_ticks > v->settle_timeout_ticks;
 }
 
 void vehicle_tick(vehicle_t *v, uint32_t now_us)

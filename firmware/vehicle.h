@@ -65,6 +65,10 @@ void vehicle_tick(vehicle_t *v, uint32_t now_us);
  * period is fault 209, the loop over budget. */
 void vehicle_tick_busy(vehicle_t *v, uint32_t busy_us);
 
+/* The motion is done: the reference at rest and the wheels in position
+ * for the window time (or the settle time out), or the servo off. */
+bool vehicle_in_position(const vehicle_t *v);
+
 /* The links a request can arrive on, for the link watchdog. */
 typedef enum { VS_LINK_CONSOLE = 0, VS_LINK_FRAMES = 1, VS_LINK_CAN = 2 } vs_link_id_t;
 /* A valid request arrived on a link: the link watchdog restarts. */
@@ -187,9 +191,9 @@ struct vehicle {
 	bool drive_timeout_reported[VS_MAX_AXES];
 	uint32_t encoder_still_ticks[VS_MAX_AXES];
 	uint32_t battery_mv;
-	/* In position: ticks within the window, ticks at rest out of it. */
+	/* In position: ticks within the window, ticks at rest out of it
+	 * (past settle_timeout_ticks: warning 154 raised, taken as done). */
 	uint32_t inpos_ticks, settle_ticks;
-	bool in_position, settle_reported;
 	char state_msg[VS_STATE_MSG_MAX];
 };
 

@@ -150,8 +150,7 @@ int vehicle_init(vehicle_t *v, const vs_config_t *cfg, const vs_hal_t *hal, cons
 	v->window_q32 = to_q32(window < 1.0 ? 1.0 : window);
 	v->window_ticks = ms_to_ticks(cfg->position_window_ms, cfg->tick_hz);
 	v->settle_timeout_ticks = ms_to_ticks(cfg->settle_timeout_ms, cfg->tick_hz);
-	v->in_position = true; /* servo off: nothing to settle */
-	v->inpos_ticks = v->window_ticks;
+	v->inpos_ticks = v->window_ticks; /* servo off: nothing to settle */
 	v->battery_low_mv = (uint32_t)(cfg->battery_low_v * 1000.0 + 0.5);
 	v->battery_critical_mv = (uint32_t)(cfg->battery_critical_v * 1000.0 + 0.5);
 	v->battery_low_armed = true;
