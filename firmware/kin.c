@@ -128,6 +128,23 @@ void kin_step(kin_t *k, const fx_twist_t *body, const int32_t meas[], int32_t ou
 		*following_err_q32 = worst;
 }
 
+void kin_pending(const kin_t *k, fx_twist_t *body)
+{
+	q32_t mm[KIN_MAX_WHEELS];
+	/* counts (Q16) times mm per count (Q32): mm in Q48, to Q32 */
+	for (uint8_t i = 0; i < k->p.n; i++)
+		mm[i] = ((k->ref_counts_q32[i] >> 16) * (k->mm_per_count_q48 >> 16)) >> 16;
+	kin_wheels_to_body(&k->p, mm, body);
+}
+
+void kin_offset(kin_t *k, const fx_twist_t *body)
+{
+	q32_t mm[KIN_MAX_WHEELS];
+	kin_body_to_wheels(&k->p, body, mm);
+	for (uint8_t i = 0; i < k->p.n; i++)
+		k->ref_counts_q32[i] += fx_mul(mm[i], k->p.counts_per_mm);
+}
+
 void odom_integrate(fx_pose_t *pose, const fx_twist_t *d, fx_trig_cache_t *tc)
 {
 	if (d->vx_pt == 0 && d->vy_pt == 0) {

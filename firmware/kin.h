@@ -85,6 +85,13 @@ void kin_sync(kin_t *k, const int32_t meas_counts[]);
 void kin_step(kin_t *k, const fx_twist_t *body, const int32_t meas_counts[], int32_t out_cps_q8[],
 	      fx_twist_t *measured_delta, int64_t *following_err_q32);
 
+/* The body displacement the wheel loop still has to make (every wheel's
+ * reference minus measured, as a twist, mm and deg, Q32). */
+void kin_pending(const kin_t *k, fx_twist_t *body);
+/* Moves the wheel references by a body displacement with no feed-forward:
+ * the position loop alone makes it, as it returns a pushed wheel. */
+void kin_offset(kin_t *k, const fx_twist_t *body);
+
 /* Integrate a body-frame displacement into a world pose (midpoint heading).
  * tc (optional) keeps the last heading's sine and cosine between calls. */
 void odom_integrate(fx_pose_t *pose, const fx_twist_t *delta_body, fx_trig_cache_t *tc);

@@ -761,13 +761,37 @@ static COLD void settle_report(vehicle_t *v, int64_t ferr)
 	alarm_raise(&v->alarms, ALM_W_NOT_IN_POSITION, s);
 }
 
+/* Pose-level hold at rest: the part of the pose error (the reference the
+ * motion ended on minus the odometry, in the unit's frame) that the wheel
+ * loop will not remove by itself, i.e. beyond what its wheels still have to
+ * travel, goes into the wheel references (kin.h). Wheels that reach their
+ * counts by another path than they left them (a push that turned and slid
+ * the base, the last corner of a route) leave such a remainder, since the
+ * pose depends on the path. A differential base cannot move sideways: its
+ * remainder across the heading stays (it shows in getPosition). Runs on the
+ * ticks at rest in which a wheel moved, so it costs a moving tick nothing. */
+static void hold_pose(vehicle_t *v)
+{
+	const fx_pose_t *r = motion_ref_pose(&v->motion);
+	q32_t ex = r->x_mm - v->odom.x_mm, ey = r->y_mm - v->odom.y_mm;
+	int32_t s, c;
+	fx_twist_t d, e;
+	fx_sincos_bam(fx_deg_to_bam(v->odom.th_deg), &s, &c);
+	kin_pending(&v->kin, &d);
+	e.vx_pt = fx_mul_q30(ex, c) + fx_mul_q30(ey, s) - d.vx_pt;
+	e.vy_pt =
+	    v->cfg.kinematics == VS_KIN_OMNI ? fx_mul_q30(ey, c) - fx_mul_q30(ex, s) - d.vy_pt : 0;
+	e.w_pt = fx_wrap_deg(r->th_deg - v->odom.th_deg) - d.w_pt;
+	kin_offset(&v->kin, &e);
+}
+
 /* In position (CiA 402's position window and window time): the reference
  * at rest and every wheel within the window of it for the window time.
  * Until then the motion is not done: the unit stays Busy, and Paused,
  * Locked and Stuck wait for it too. A unit that does not get there within
  * settle_timeout_ms raises warning 154 once and is taken as done (it holds
  * where it is). */
-static void supervise_position(vehicle_t *v, int64_t ferr)
+static void supervise_position(vehicle_t *v, int64_t ferr, const fx_twist_t *moved)
 {
 	/* The reference moved this tick (the command is its step; zero with
 	 * the servo off). */
@@ -781,7 +805,12 @@ static void supervise_position(vehicle_t *v, int64_t ferr)
 		 * position. */
 		v->inpos_ticks = v->window_ticks;
 		v->settle_ticks = 0;
-	} else if (ferr <= v->window_q32) {
+		return;
+	}
+	/* At rest, a wheel moved: the pose may have left its hold. */
+	if ((moved->vx_pt | moved->vy_pt | moved->w_pt) != 0)
+		hold_pose(v);
+	if (ferr <= v->window_q32) {
 		v->settle_ticks = 0;
 		if (v->inpos_ticks < v->window_ticks)
 			v->inpos_ticks++;
@@ -826,12 +855,12 @@ void vehicle_tick(vehicle_t *v, uint32_t now_us)
 
 	if (v->servo && ferr > v->following_err_max_q32)
 		following_fault(v, ferr);
-	supervise_position(v, ferr);
+	supervise_position(v, ferr, &delta);
 
-	for (uint8_t i = 0; i < v->naxes; i++) {
-		if (!v->servo)
+	if (!v->servo)
+		for (uint8_t i = 0; i < v->naxes; i++)
 			v->wheel_cps_q8[i] = 0;
+	for (uint8_t i = 0; i < v->naxes; i++)
 		v->hal.ops->drive_set_velocity(v->hal.ctx, i, v->wheel_cps_q8[i]);
-	}
 	v->ticks++;
 }

@@ -190,6 +190,7 @@ static void test_push_at_rest(void **state)
 	push_returns("config/vehicle-omni.xml", 0.0, 10.0, 0.0);
 	push_returns("config/vehicle-omni.xml", 5.0, -5.0, 0.0);
 	push_returns("config/vehicle-omni.xml", 0.0, 0.0, 2.0);
+	push_returns("config/vehicle-omni.xml", 5.0, -5.0, 2.0);
 }
 
 static void test_push_past_the_following_error(void **state)
