@@ -379,23 +379,23 @@ void suite::run()
 	}
 	wait_ms(1000);
 	state("1 s into the move", 0x11, "Busy");
-	pose("1 s into the move", 273.01613380806521, 299.89091100846417, 30);
+	pose("1 s into the move", 273.38976496248506, 300.10662705497816, 30);
 	wait_ms(4000);
 	state("after the move", 0x12, "Warning-122");
-	pose("after the move", 966.02720140223391, 700.00103564909659, 30);
+	pose("after the move", 966.0272013999056, 700.0010356511921, 30);
 	call("clearAlarm", vs_->clearAlarm(), true, "clearAlarm");
 
 	call("moveTurn(90)", vs_->moveTurn(90), true, "moveTurn");
 	wait_ms(4000);
 	state("after moveTurn", 0x10, "Ready");
-	pose("after moveTurn", 966.02433598088101, 700.00182862905785, 120.00274658203125);
+	pose("after moveTurn", 966.0169808259234, 700.0143312914297, 119.99862670898438);
 
 	{
 		Position p = {200, 0, 0};
 		call("moveLinearRel(200, 0, 0)", vs_->moveLinearRel(p), true, "moveLinearRel");
 	}
 	wait_ms(3000);
-	pose("after moveLinearRel", 866.02558327489533, 873.20478719566017, 119.99862670898438);
+	pose("after moveLinearRel", 866.0254205923993, 873.2048366146628, 119.99862670898438);
 
 	{
 		Point off = {100, 500}, c = {0, 500};
@@ -406,7 +406,7 @@ void suite::run()
 	}
 	wait_ms(8000);
 	state("after moveCircularRel", 0x12, "Warning-112");
-	pose("after moveCircularRel", 562.41794662363827, 1106.1692014739383, 165);
+	pose("after moveCircularRel", 562.4175800706726, 1106.1689934642054, 165);
 	call("clearAlarm", vs_->clearAlarm(), true, "clearAlarm");
 
 	{
@@ -416,8 +416,8 @@ void suite::run()
 	}
 	wait_ms(15000);
 	state("after two moveLinearAbs", 0x10, "Ready");
-	pose("after two moveLinearAbs", 500.00483005493879, 799.99841344333254,
-	     -179.99542236328125);
+	pose("after two moveLinearAbs", 500.0102197143715, 799.9994834051467,
+	     -179.99954223632812);
 
 	{
 		Point a = {200, 800}, b = {200, 400};
@@ -426,8 +426,8 @@ void suite::run()
 	}
 	wait_ms(15000);
 	state("after two moveCruiseAbs", 0x10, "Ready");
-	pose("after two moveCruiseAbs", 200.09546324633993, 400.08265417208895,
-	     -89.996795654296875);
+	pose("after two moveCruiseAbs", 200.00019866228104, 399.9886361688841,
+	     -90.00091552734375);
 
 	{
 		Position far = {600, 0, 0}, near = {400, 0, 0};
@@ -439,7 +439,7 @@ void suite::run()
 	}
 	wait_ms(10000);
 	state("after moveContinuousRel", 0x10, "Ready");
-	pose("after moveContinuousRel", 200.09061147342436, -200.1112971235998, -90.00091552734375);
+	pose("after moveContinuousRel", 200.0001520954538, -200.2053149647545, -89.99679565429688);
 
 	// Jog: runs while commanded, stops on the 300 ms watchdog.
 	call("moveJog(0, 100, 0): y on a differential base", vs_->moveJog(0, 100, 0), false,
@@ -451,7 +451,7 @@ void suite::run()
 	state("jogging", 0x11, "Busy");
 	wait_ms(3000);
 	state("after the jog watchdog", 0x10, "Ready");
-	pose("after the jog", 200.09032765123993, -236.12149601057172, -90.00091552734375);
+	pose("after the jog", 200.000144087011, -236.20113279484212, -90.00091552734375);
 
 	// Pause: commands queue, nothing moves until resume.
 	call("pause", vs_->pause(), true, "pause");
@@ -463,11 +463,11 @@ void suite::run()
 	}
 	wait_ms(1000);
 	state("still paused", 0x15, "Paused");
-	pose("still paused", 200.09033563779667, -236.10711492155679, -89.996795654296875);
+	pose("still paused", 200.00013891700655, -236.2011327818036, -90.00091552734375);
 	call("resume", vs_->resume(), true, "resume");
 	wait_ms(10000);
 	state("after resume", 0x10, "Ready");
-	pose("after resume", 199.99980236077681, -0.0011857845820486546, -89.996795654296875);
+	pose("after resume", 200.0001798667945, 0.0185956081841141, -89.99954223632812);
 
 	// Stop: decelerates at the maximum and forgets the queue.
 	call("moveForward(2000)", vs_->moveForward(2000), true, "moveForward");
@@ -475,7 +475,7 @@ void suite::run()
 	call("stop", vs_->stop(), true, "stop");
 	wait_ms(3000);
 	state("after stop", 0x10, "Ready");
-	pose("after stop", 200.00204652734101, -280.00061620073393, -89.996795654296875);
+	pose("after stop", 200.00014663604088, -279.9952159195673, -90.003662109375);
 
 	// Contact sensor: Locked until unlock().
 	call("setDigitalSensorLock(true)", vs_->setDigitalSensorLock(true), true,
