@@ -130,7 +130,7 @@ void kin_step(kin_t *k, const fx_twist_t *body, const int32_t meas[], int32_t ou
 
 void kin_pending(const kin_t *k, fx_twist_t *body)
 {
-	q32_t mm[KIN_MAX_WHEELS];
+	q32_t mm[KIN_MAX_WHEELS] = {0};
 	/* counts (Q16) times mm per count (Q32): mm in Q48, to Q32 */
 	for (uint8_t i = 0; i < k->p.n; i++)
 		mm[i] = ((k->ref_counts_q32[i] >> 16) * (k->mm_per_count_q48 >> 16)) >> 16;
@@ -139,7 +139,7 @@ void kin_pending(const kin_t *k, fx_twist_t *body)
 
 void kin_offset(kin_t *k, const fx_twist_t *body)
 {
-	q32_t mm[KIN_MAX_WHEELS];
+	q32_t mm[KIN_MAX_WHEELS] = {0};
 	kin_body_to_wheels(&k->p, body, mm);
 	for (uint8_t i = 0; i < k->p.n; i++)
 		k->ref_counts_q32[i] += fx_mul(mm[i], k->p.counts_per_mm);

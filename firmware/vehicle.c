@@ -308,6 +308,10 @@ bool vs_getState(vehicle_t *v, int16_t *state, char msg[VS_STATE_MSG_MAX])
 {
 	const vs_alarm_t *fault = alarm_newest(&v->alarms, VS_ALARM_FAULT);
 	const vs_alarm_t *warn = alarm_newest(&v->alarms, VS_ALARM_WARNING);
+	/* Braking for a lock, an obstacle or a pause, or settling, the unit is
+	 * Busy: the state that follows is reported once the wheels are in
+	 * place. */
+	bool settled = vehicle_in_position(v);
 	int16_t code;
 	if (fault) {
 		code = VS_STATE_ALARM;
@@ -315,24 +319,19 @@ bool vs_getState(vehicle_t *v, int16_t *state, char msg[VS_STATE_MSG_MAX])
 	} else if (!v->powered) {
 		code = VS_STATE_UNPOWERED;
 		state_msg(v->state_msg, "Unpowered", NULL);
-	} else if (!vehicle_in_position(v)) {
-		/* Braking for a lock, an obstacle or a pause, or settling: the
-		 * state that follows is reported once the wheels are in place. */
-		code = VS_STATE_BUSY;
-		state_msg(v->state_msg, "Busy", NULL);
-	} else if (v->locked) {
+	} else if (settled && v->locked) {
 		code = VS_STATE_LOCKED;
 		state_msg(v->state_msg, "Locked", NULL);
-	} else if (v->stuck) {
+	} else if (settled && v->stuck) {
 		code = VS_STATE_STUCK;
 		state_msg(v->state_msg, "Stuck", NULL);
 	} else if (!v->servo) {
 		code = VS_STATE_POWERED;
 		state_msg(v->state_msg, "Powered", NULL);
-	} else if (motion_is_paused(&v->motion)) {
+	} else if (settled && motion_is_paused(&v->motion)) {
 		code = VS_STATE_PAUSED;
 		state_msg(v->state_msg, "Paused", NULL);
-	} else if (motion_has_work(&v->motion)) {
+	} else if (!settled || motion_has_work(&v->motion)) {
 		code = VS_STATE_BUSY;
 		state_msg(v->state_msg, "Busy", NULL);
 	} else if (warn) {

@@ -416,8 +416,7 @@ void suite::run()
 	}
 	wait_ms(15000);
 	state("after two moveLinearAbs", 0x10, "Ready");
-	pose("after two moveLinearAbs", 500.0102197143715, 799.9994834051467,
-	     -179.99954223632812);
+	pose("after two moveLinearAbs", 500.0102197143715, 799.9994834051467, -179.99954223632812);
 
 	{
 		Point a = {200, 800}, b = {200, 400};
@@ -426,8 +425,7 @@ void suite::run()
 	}
 	wait_ms(15000);
 	state("after two moveCruiseAbs", 0x10, "Ready");
-	pose("after two moveCruiseAbs", 200.00019866228104, 399.9886361688841,
-	     -90.00091552734375);
+	pose("after two moveCruiseAbs", 200.00019866228104, 399.9886361688841, -90.00091552734375);
 
 	{
 		Position far = {600, 0, 0}, near = {400, 0, 0};
