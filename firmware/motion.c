@@ -580,6 +580,7 @@ void motion_halt(motion_t *m)
 	m->vtarget = (fx_twist_t){0};
 	m->stopping = false;
 	m->paused = false;
+	m->rest_tick = false;
 	m->mode = m->joystick ? MODE_JOYSTICK : MODE_IDLE;
 }
 
@@ -980,6 +981,7 @@ static void path_tick(motion_t *m, fx_twist_t *out)
 			if (m->q_count == 0) {
 				m->mode = MODE_IDLE;
 				m->v = 0;
+				m->rest_tick = false;
 				break;
 			}
 			if (!next_piece(m)) {
@@ -992,6 +994,17 @@ static void path_tick(motion_t *m, fx_twist_t *out)
 			}
 			m->seg.s = 0;
 			limits_changed(m);
+			if (m->rest_tick) {
+				/* A stop is a tick at zero before the next piece: the
+				 * stopping piece's last step was its remainder (up to
+				 * a), and a next piece that starts the other way takes
+				 * a as well; both in one tick would change the speed by
+				 * up to 2a (tests/fuzz/findings/fuzz_ops-opposite-
+				 * turns-after-a-stop: 390 deg/s^2 on a 360 limit). */
+				m->rest_tick = false;
+				*out = (fx_twist_t){0};
+				return;
+			}
 		}
 		if (budget < 0) {
 			if (!m->lim_ok) {
@@ -1072,6 +1085,7 @@ static void path_tick(motion_t *m, fx_twist_t *out)
 		if (!blends_onward(m, kind)) {
 			/* A stop: the last step covered the exact remainder (< a). */
 			m->v = 0;
+			m->rest_tick = true;
 			break;
 		}
 		if (kind == SEG_LINE && q_at(m, 0)->corner.lh_mm != 0) {

@@ -127,6 +127,7 @@ typedef struct {
 	motion_cmd_t q[MOTION_QUEUE_LEN];
 	uint8_t q_head, q_count;
 	uint8_t stop_drop; /* commands stop() discards once at rest (the first) */
+	bool rest_tick;	   /* a piece stopped: the next tick stands still */
 
 	seg_t seg; /* active piece (mode PATH) */
 	q32_t v;   /* speed along the active piece, per tick */

@@ -395,7 +395,7 @@ void suite::run()
 		call("moveLinearRel(200, 0, 0)", vs_->moveLinearRel(p), true, "moveLinearRel");
 	}
 	wait_ms(3000);
-	pose("after moveLinearRel", 866.0254205923993, 873.2048366146628, 119.99862670898438);
+	pose("after moveLinearRel", 866.0254232794978, 873.204838163685, 119.99862670898438);
 
 	{
 		Point off = {100, 500}, c = {0, 500};
@@ -406,7 +406,7 @@ void suite::run()
 	}
 	wait_ms(8000);
 	state("after moveCircularRel", 0x12, "Warning-112");
-	pose("after moveCircularRel", 562.4175800706726, 1106.1689934642054, 165);
+	pose("after moveCircularRel", 562.4176010128576, 1106.1690170243382, 165);
 	call("clearAlarm", vs_->clearAlarm(), true, "clearAlarm");
 
 	{
@@ -416,7 +416,7 @@ void suite::run()
 	}
 	wait_ms(15000);
 	state("after two moveLinearAbs", 0x10, "Ready");
-	pose("after two moveLinearAbs", 500.0102197143715, 799.9994834051467, -179.99954223632812);
+	pose("after two moveLinearAbs", 499.99585204478353, 799.9994450833183, -179.99542236328125);
 
 	{
 		Point a = {200, 800}, b = {200, 400};
@@ -425,7 +425,7 @@ void suite::run()
 	}
 	wait_ms(15000);
 	state("after two moveCruiseAbs", 0x10, "Ready");
-	pose("after two moveCruiseAbs", 200.00019866228104, 399.9886361688841, -90.00091552734375);
+	pose("after two moveCruiseAbs", 200.00028504012153, 400.0029987031594, -89.99679565429688);
 
 	{
 		Position far = {600, 0, 0}, near = {400, 0, 0};
@@ -437,7 +437,7 @@ void suite::run()
 	}
 	wait_ms(10000);
 	state("after moveContinuousRel", 0x10, "Ready");
-	pose("after moveContinuousRel", 200.0001520954538, -200.2053149647545, -89.99679565429688);
+	pose("after moveContinuousRel", 200.00029328465462, -200.1909524272196, -90.00091552734375);
 
 	// Jog: runs while commanded, stops on the 300 ms watchdog.
 	call("moveJog(0, 100, 0): y on a differential base", vs_->moveJog(0, 100, 0), false,
@@ -449,7 +449,7 @@ void suite::run()
 	state("jogging", 0x11, "Busy");
 	wait_ms(3000);
 	state("after the jog watchdog", 0x10, "Ready");
-	pose("after the jog", 200.000144087011, -236.20113279484212, -90.00091552734375);
+	pose("after the jog", 200.00028763199225, -236.20115132583305, -90.00091552734375);
 
 	// Pause: commands queue, nothing moves until resume.
 	call("pause", vs_->pause(), true, "pause");
@@ -461,11 +461,11 @@ void suite::run()
 	}
 	wait_ms(1000);
 	state("still paused", 0x15, "Paused");
-	pose("still paused", 200.00013891700655, -236.2011327818036, -90.00091552734375);
+	pose("still paused", 200.00028349645436, -236.20115131232888, -90.00091552734375);
 	call("resume", vs_->resume(), true, "resume");
 	wait_ms(10000);
 	state("after resume", 0x10, "Ready");
-	pose("after resume", 200.0001798667945, 0.0185956081841141, -89.99954223632812);
+	pose("after resume", 200.0003189421259, 0.018578254617750645, -89.99954223632812);
 
 	// Stop: decelerates at the maximum and forgets the queue.
 	call("moveForward(2000)", vs_->moveForward(2000), true, "moveForward");
@@ -473,7 +473,7 @@ void suite::run()
 	call("stop", vs_->stop(), true, "stop");
 	wait_ms(3000);
 	state("after stop", 0x10, "Ready");
-	pose("after stop", 200.00014663604088, -279.9952159195673, -90.003662109375);
+	pose("after stop", 200.00034011295065, -280.0096143465489, -89.99954223632812);
 
 	// Contact sensor: Locked until unlock().
 	call("setDigitalSensorLock(true)", vs_->setDigitalSensorLock(true), true,
