@@ -27,21 +27,61 @@ q32_t fx_mul_portable(q32_t a, q32_t b)
 	return neg ? -(int64_t)r : (int64_t)r;
 }
 
-uint64_t fx_isqrt64(uint64_t v)
+uint64_t fx_mulhi_u64_portable(uint64_t x, uint64_t y)
+{
+	uint64_t x0 = (uint32_t)x, x1 = x >> 32, y0 = (uint32_t)y, y1 = y >> 32;
+	uint64_t p01 = x0 * y1, p10 = x1 * y0;
+	uint64_t mid = ((x0 * y0) >> 32) + (uint32_t)p01 + (uint32_t)p10;
+	return x1 * y1 + (p01 >> 32) + (p10 >> 32) + (mid >> 32);
+}
+
+/* floor(sqrt(v)) for v < 2^32, by Newton's iteration from 2^ceil(bits / 2):
+ * it falls monotonically onto the root in a few steps, each a hardware
+ * division on a 32-bit microcontroller. */
+static uint32_t isqrt32(uint32_t v)
 {
 	if (v < 2)
 		return v;
-	/* Newton from 2^ceil(bits / 2) >= sqrt(v): the integer iteration falls
-	 * monotonically onto floor(sqrt(v)) in at most six steps for 64 bits,
-	 * each a hardware division (the bitwise method took 32 rounds). */
-	int bits = 64 - __builtin_clzll(v);
-	uint64_t x = (uint64_t)1 << ((bits + 1) / 2);
+	int bits = 32 - __builtin_clz(v);
+	uint32_t x = (uint32_t)1 << ((bits + 1) / 2);
+	for (;;) {
+		uint32_t y = (x + v / x) >> 1;
+		if (y >= x)
+			return x;
+		x = y;
+	}
+}
+
+uint64_t fx_isqrt64(uint64_t v)
+{
+	if (v >> 32 == 0)
+		return isqrt32((uint32_t)v);
+	/* Start from the root of the top 32 or 31 bits, rounded up: at or above
+	 * sqrt(v) and within 2^-15 of it, so the same iteration (monotone from
+	 * above) ends after one or two 64-bit divisions, not six. */
+	int k = (64 - __builtin_clzll(v) - 31) / 2;
+	uint64_t x = ((uint64_t)isqrt32((uint32_t)(v >> (2 * k))) + 1) << k;
 	for (;;) {
 		uint64_t y = (x + v / x) >> 1;
 		if (y >= x)
 			return x;
 		x = y;
 	}
+}
+
+/* n / d for a divisor below 2^16, in four 32-bit divisions of 16 bits
+ * each: the same quotient as the 64-bit division, which on a 32-bit
+ * microcontroller is a library call of some 100 instructions. */
+uint64_t fx_udiv64_small(uint64_t n, uint32_t d)
+{
+	uint64_t q = 0;
+	uint32_t r = 0;
+	for (int sh = 48; sh >= 0; sh -= 16) {
+		uint32_t cur = (r << 16) | (uint32_t)((n >> sh) & 0xffffu);
+		q = (q << 16) | (cur / d);
+		r = cur % d;
+	}
+	return q;
 }
 
 /* Taylor series on |x| <= pi/4 (Q30 radians), Horner form with Q30

@@ -32,6 +32,8 @@ static inline q32_t fx_from_int(int32_t v)
 
 /* Floor of the square root of a 64-bit unsigned value. */
 uint64_t fx_isqrt64(uint64_t v);
+/* n / d for 0 < d < 2^16 (fx.c: cheap where 64-bit division is a call). */
+uint64_t fx_udiv64_small(uint64_t n, uint32_t d);
 
 /* Sine and cosine of a binary angle (2^32 per turn), Q30 result.
  * Absolute error below 2e-9 (about 2 LSB of Q30). */
@@ -100,6 +102,18 @@ static inline q32_t fx_mul(q32_t a, q32_t b)
 	return (q32_t)p;
 #else
 	return fx_mul_portable(a, b);
+#endif
+}
+
+/* The high half of a 64 x 64-bit product; the portable form is what a
+ * target without 128-bit arithmetic runs (tests/test_fx.c compares them). */
+uint64_t fx_mulhi_u64_portable(uint64_t x, uint64_t y);
+static inline uint64_t fx_mulhi_u64(uint64_t x, uint64_t y)
+{
+#ifdef __SIZEOF_INT128__
+	return (uint64_t)(((unsigned __int128)x * y) >> 64);
+#else
+	return fx_mulhi_u64_portable(x, y);
 #endif
 }
 

@@ -43,8 +43,8 @@ void motion_init(motion_t *m, const motion_params_t *p)
 	per_tick(m);
 	m->v_t_pt = m->vmax_t_pt;
 	m->v_r_pt = m->vmax_r_pt;
-	m->a_t_pt2 = m->amax_t_pt2;
-	m->a_r_pt2 = m->amax_r_pt2;
+	m->a_t_pt2 = fx_max64(m->amax_t_pt2, 1);
+	m->a_r_pt2 = fx_max64(m->amax_r_pt2, 1);
 	m->jog_timeout_ticks = p->tick_hz / 2;
 }
 
@@ -196,7 +196,9 @@ static bool push(motion_t *m, const motion_cmd_t *c)
 	return true;
 }
 
-static void pop(motion_t *m)
+/* Inline: out of line, the blended cruise's dearest tick cost 12 more
+ * instructions (tools/bench/tickcost.sh, measured). */
+static inline __attribute__((always_inline)) void pop(motion_t *m)
 {
 	if (m->q_count == 0)
 		return;
@@ -204,6 +206,8 @@ static void pop(motion_t *m)
 	m->q_count--;
 	if (m->stop_drop)
 		m->stop_drop--;
+	if (m->pass_todo && --m->pass_todo == 0)
+		m->pass_caps = false;
 	limits_changed(m);
 }
 
@@ -292,7 +296,9 @@ bool motion_circular_rel(motion_t *m, q32_t cx_mm, q32_t cy_mm, q32_t angle_deg)
 static q32_t corner_vrot(const motion_t *m, const motion_cmd_t *c)
 {
 	q32_t vr = fx_mul(m->v_r_pt, c->corner.k_mm_deg);
-	vr -= vr / 100; /* 1 % margin: the step into the corner may carry one tick of a */
+	/* 1 % margin: the step into the corner may carry one tick of a
+	 * (fx_udiv64_small: vr / 100 without a library call) */
+	vr -= vr >= 0 ? (q32_t)fx_udiv64_small((uint64_t)vr, 100) : vr / 100;
 	return fx_min64(vr, c->corner.vacc_pt);
 }
 
@@ -337,44 +343,120 @@ static q32_t cruise_line_len(motion_t *m, uint8_t i)
 	return l > 0 ? l : 0;
 }
 
-/* Lower each corner's speed so the unit can brake to the next corner's speed
- * on the line between, and to a stop at the last waypoint; and keep, per
- * corner, what the tick needs when its line or the corner begins. */
-static void backward_pass(motion_t *m)
+/* The backward pass from command i down, given what command i + 1 left:
+ * its corner speed and braking distance, and whether its speed stayed. Only
+ * commands from index lo up have new geometry (a corner planned at lo
+ * changes the lines of lo and lo + 1); below them a command's results
+ * depend on the next one's line and corner speed alone, so the walk stops
+ * at the first command whose successor kept both: queueing a waypoint costs
+ * the corners its speed reaches, not the whole queue.
+ *
+ * With a budget (motion_set_plan_budget), at most that many commands below
+ * the new geometry are walked; the rest stay pending (pass_todo: the queue's
+ * first pass_todo commands) and motion_plan_idle goes on with them. Until
+ * then the head keeps the plan it had, as if the request had come later:
+ * the running piece never sees half a pass. */
+static void pass_walk(motion_t *m, int i, uint8_t lo, q32_t next_v, q32_t next_extra,
+		      bool next_same)
 {
-	q32_t next_v = 0;
-	limits_changed(m);
-	for (uint8_t i = 0; i < m->q_count; i++) {
-		motion_cmd_t *c = q_at(m, i);
-		if (c->kind == MCMD_CRUISE && c->start_known)
-			c->line_mm = cruise_line_len(m, i);
-	}
-	for (int i = (int)m->q_count - 1; i >= 0; i--) {
+	traj_rate_t at;
+	traj_rate_init(&at, m->a_t_pt2);
+	uint32_t left = m->plan_budget ? m->plan_budget : UINT32_MAX;
+	for (; i >= 0; i--) {
+		bool pending = i < (int)m->pass_todo;
+		if (i + 1 < (int)lo && next_same)
+			return; /* older pending work, if any, stays pending */
+		if (!(lo > 0 && i + 1 >= (int)lo) && left-- == 0) {
+			m->pass_todo = (uint8_t)(i + 1);
+			return;
+		}
 		motion_cmd_t *c = q_at(m, (uint8_t)i);
 		if (c->kind != MCMD_CRUISE || !c->has_corner) {
-			next_v = 0;
+			next_same = !(c->kind == MCMD_CRUISE && c->vend_pt != 0);
+			next_v = next_extra = 0;
 			if (c->kind == MCMD_CRUISE)
 				c->vend_pt = 0;
 			continue;
 		}
-		c->corner_vrot_pt = corner_vrot(m, c);
-		/* A collinear pass (no corner piece) brakes at the line's rate. */
-		c->corner_a_pt2 = fx_max64(
-		    c->corner.lh_mm > 0 ? fx_min64(m->a_t_pt2, c->corner.acc_pt2) : m->a_t_pt2, 1);
+		if (i >= (int)lo || (pending && m->pass_caps)) {
+			/* A corner's own caps: kept below lo (same corner, same limits) */
+			c->corner_vrot_pt = corner_vrot(m, c);
+			/* A collinear pass (no corner piece) brakes at the line's rate. */
+			c->corner_a_pt2 =
+			    fx_max64(c->corner.lh_mm > 0 ? fx_min64(m->a_t_pt2, c->corner.acc_pt2)
+							 : m->a_t_pt2,
+				     1);
+		}
 		c->corner_extra_mm = 0;
 		q32_t v = fx_min64(vt_eff(m), c->corner_vrot_pt);
 		if ((uint8_t)(i + 1) < m->q_count) {
 			q32_t after = q_at(m, (uint8_t)(i + 1))->line_mm;
-			q32_t reach = traj_reach(after, next_v, m->a_t_pt2);
+			/* traj_reach(after, next_v, a): the next corner's braking
+			 * distance is its line_extra_mm, already formed */
+			q32_t reach = traj_umax_r(after + next_extra, &at);
 			if (reach < v)
 				v = reach;
-			c->corner_extra_mm =
-			    after + traj_brake_dist(next_v, c->corner_a_pt2) + next_v;
+			q32_t b = c->corner_a_pt2 == at.a
+				      ? traj_brake_dist_r(next_v, &at)
+				      : traj_brake_dist(next_v, c->corner_a_pt2);
+			c->corner_extra_mm = after + b + next_v;
 		}
+		next_same = c->vend_pt == v;
 		c->vend_pt = v;
-		c->line_extra_mm = traj_brake_dist(v, fx_max64(m->a_t_pt2, 1)) + v;
+		c->line_extra_mm = traj_brake_dist_r(v, &at) + v;
 		next_v = v;
+		next_extra = c->line_extra_mm;
 	}
+	m->pass_todo = 0;
+	m->pass_caps = false;
+}
+
+/* Lower each corner's speed so the unit can brake to the next corner's speed
+ * on the line between, and to a stop at the last waypoint; and keep, per
+ * corner, what the tick needs when its line or the corner begins. Commands
+ * from index lo up have new geometry (0: the limits changed, all of them). */
+static void backward_pass_from(motion_t *m, uint8_t lo)
+{
+	limits_changed(m);
+	if (vt_eff(m) != m->pass_vt)
+		lo = 0; /* every corner speed follows a new line speed */
+	m->pass_vt = vt_eff(m);
+	if (lo == 0)
+		m->pass_caps = true; /* until walked, every corner's caps are stale */
+	for (uint8_t i = lo; i < m->q_count; i++) {
+		motion_cmd_t *c = q_at(m, i);
+		if (c->kind == MCMD_CRUISE && c->start_known)
+			c->line_mm = cruise_line_len(m, i);
+	}
+	pass_walk(m, (int)m->q_count - 1, lo, 0, 0, false);
+}
+
+bool motion_plan_idle(motion_t *m)
+{
+	if (m->pass_todo == 0)
+		return false;
+	limits_changed(m);
+	uint8_t i = m->pass_todo;
+	q32_t next_v = 0, next_extra = 0;
+	if (i < m->q_count) {
+		const motion_cmd_t *n = q_at(m, i);
+		if (n->kind == MCMD_CRUISE && n->has_corner) {
+			next_v = n->vend_pt;
+			next_extra = n->line_extra_mm;
+		}
+	}
+	pass_walk(m, i - 1, 0, next_v, next_extra, false);
+	return true;
+}
+
+void motion_set_plan_budget(motion_t *m, uint8_t n)
+{
+	m->plan_budget = n;
+}
+
+static void backward_pass(motion_t *m)
+{
+	backward_pass_from(m, 0);
 }
 
 /* Distance from the reference to the point where the active line ends, if
@@ -392,33 +474,35 @@ static bool head_line_remaining(motion_t *m, q32_t *rem)
 	return true;
 }
 
-/* Plan the corner at queued cruise command i (blending into i + 1). */
-static void plan_corner(motion_t *m, uint8_t i)
+/* Plan the corner at queued cruise command i (blending into i + 1); true
+ * when one was planned (and the corner speeds with it). */
+static bool plan_corner(motion_t *m, uint8_t i)
 {
 	motion_cmd_t *c = q_at(m, i), *n = q_at(m, (uint8_t)(i + 1));
 	if (i < m->stop_drop)
-		return; /* discarded by a stop: no corner into what follows */
+		return false; /* discarded by a stop: no corner into what follows */
 	if (c->kind != MCMD_CRUISE || n->kind != MCMD_CRUISE || !c->start_known || c->has_corner)
-		return;
+		return false;
 	/* The head command's stage 2 is its line running (next_piece), then
 	 * its corner: a corner can still be fitted in what is left of the line. */
 	if (i == 0 && (c->stage > 2 || (c->stage == 2 && m->seg.kind != SEG_LINE)))
-		return; /* already past its line */
-	q32_t inx = c->target.x_mm - c->sx_mm, iny = c->target.y_mm - c->sy_mm;
-	q32_t outx = n->target.x_mm - c->target.x_mm, outy = n->target.y_mm - c->target.y_mm;
+		return false; /* already past its line */
 	q32_t lin = c->len_mm, lout = n->len_mm;
 	if (lin < TINY_MM || lout < TINY_MM)
-		return;
-	q32_t hin = fx_atan2_deg(iny, inx), hout = fx_atan2_deg(outy, outx);
-	q32_t phi = fx_wrap_deg(hout - hin);
+		return false;
+	/* The deflection from the two lines' unit vectors (the next line
+	 * starts on this waypoint): one arctangent, not two headings. */
+	int64_t cross = (int64_t)c->ux * n->uy - (int64_t)c->uy * n->ux;
+	int64_t dot = (int64_t)c->ux * n->ux + (int64_t)c->uy * n->uy;
+	q32_t phi = fx_atan2_deg(cross, dot);
 	if (fx_abs64(phi) < TINY_DEG) {
 		/* Collinear: pass straight through at full speed. */
 		c->corner = (traj_corner_t){0};
 		c->corner.k_mm_deg = INT64_MAX / 4;
 		c->corner.vacc_pt = INT64_MAX / 4;
 		c->has_corner = true;
-		backward_pass(m);
-		return;
+		backward_pass_from(m, i);
+		return true;
 	}
 	q32_t t = m->p.cruise_blend_mm;
 	q32_t avail_in = lin;
@@ -435,7 +519,7 @@ static void plan_corner(motion_t *m, uint8_t i)
 		t = fx_min64(t, rem - m->v - m->v_t_pt);
 	traj_corner_t corner;
 	if (t <= TINY_MM || !traj_corner_plan(&corner, phi, t, m->a_r_pt2))
-		return;
+		return false;
 	c->corner = corner;
 	c->has_corner = true;
 	/* Exit: the integration arrives there within nanometres (clothoid
@@ -443,20 +527,21 @@ static void plan_corner(motion_t *m, uint8_t i)
 	 * line is the one planned. */
 	c->exit_x_mm = c->target.x_mm + fx_mul_q30(corner.t_mm, n->ux);
 	c->exit_y_mm = c->target.y_mm + fx_mul_q30(corner.t_mm, n->uy);
-	backward_pass(m);
+	backward_pass_from(m, i);
 	if (executing) {
 		/* Can the unit still slow to the corner speed before it begins? */
 		q32_t d = rem - corner.t_mm;
 		if (traj_reach(d, c->vend_pt, m->a_t_pt2) < m->v) {
 			c->has_corner = false;
-			backward_pass(m);
-			return;
+			backward_pass_from(m, i);
+			return true;
 		}
 		/* The line now ends at the corner entry. */
 		m->seg.len -= corner.t_mm;
 		m->seg.p_end.x_mm = c->target.x_mm - fx_mul_q30(corner.t_mm, c->ux);
 		m->seg.p_end.y_mm = c->target.y_mm - fx_mul_q30(corner.t_mm, c->uy);
 	}
+	return true;
 }
 
 bool motion_cruise_abs(motion_t *m, q32_t x_mm, q32_t y_mm)
@@ -470,9 +555,9 @@ bool motion_cruise_abs(motion_t *m, q32_t x_mm, q32_t y_mm)
 		cruise_set_start(&c, sx, sy);
 	if (!push(m, &c))
 		return false;
-	if (m->q_count >= 2)
-		plan_corner(m, (uint8_t)(m->q_count - 2));
-	backward_pass(m);
+	uint8_t last = (uint8_t)(m->q_count - 1);
+	if (last == 0 || !plan_corner(m, (uint8_t)(last - 1)))
+		backward_pass_from(m, last);
 	return true;
 }
 
@@ -573,6 +658,8 @@ void motion_halt(motion_t *m)
 {
 	m->q_count = 0;
 	m->stop_drop = 0;
+	m->pass_todo = 0;
+	m->pass_caps = false;
 	limits_changed(m);
 	m->seg.kind = SEG_NONE;
 	m->v = 0;
@@ -767,9 +854,8 @@ static bool next_piece(motion_t *m)
 			case 0: {
 				if (!c->start_known) {
 					cruise_set_start(c, r->x_mm, r->y_mm);
-					if (m->q_count >= 2)
-						plan_corner(m, 0);
-					backward_pass(m);
+					if (m->q_count < 2 || !plan_corner(m, 0))
+						backward_pass(m);
 				}
 				if (m->v > 0)
 					continue; /* arriving out of a corner, already aligned */

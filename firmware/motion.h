@@ -126,8 +126,12 @@ typedef struct {
 
 	motion_cmd_t q[MOTION_QUEUE_LEN];
 	uint8_t q_head, q_count;
-	uint8_t stop_drop; /* commands stop() discards once at rest (the first) */
-	bool rest_tick;	   /* a piece stopped: the next tick stands still */
+	uint8_t stop_drop;   /* commands stop() discards once at rest (the first) */
+	bool rest_tick;	     /* a piece stopped: the next tick stands still */
+	q32_t pass_vt;	     /* the line speed the corner speeds were planned for */
+	uint8_t plan_budget; /* commands a pass walks per call (0: all) */
+	uint8_t pass_todo;   /* the queue's first pass_todo commands await the pass */
+	bool pass_caps;	     /* ... and their corners' caps with it */
 
 	seg_t seg; /* active piece (mode PATH) */
 	q32_t v;   /* speed along the active piece, per tick */
@@ -168,6 +172,13 @@ bool motion_linear_rel(motion_t *m, const fx_pose_t *rel);
 bool motion_linear_abs(motion_t *m, const fx_pose_t *abs_pose);
 bool motion_circular_rel(motion_t *m, q32_t cx_mm, q32_t cy_mm, q32_t angle_deg);
 bool motion_cruise_abs(motion_t *m, q32_t x_mm, q32_t y_mm);
+/* Spread the corner-speed planning of the queue over calls: each request
+ * walks at most n queued commands beyond the ones its change touches (0:
+ * all, the default), and motion_plan_idle walks n more of what is left
+ * (true: it had some). For a platform whose requests run between two ticks
+ * (the Cortex-M board): a pass over a full queue costs it about a period. */
+void motion_set_plan_budget(motion_t *m, uint8_t n);
+bool motion_plan_idle(motion_t *m);
 
 /* Velocity and goal modes. These take over from jog/continuous/joystick
  * with continuous velocity; they are refused (false) while queued path

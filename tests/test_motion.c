@@ -607,6 +607,117 @@ static void test_stop_at_corner_brakes_along_path(void **state)
 	assert_int_equal(motion_queue_len(&r.m), 0);
 }
 
+/* ---- the planning pass, whole and spread -------------------------------- */
+
+/* A dense route: straight runs of short steps (every corner speed follows
+ * the braking distance to the last waypoint), gentle bends and zigzags. */
+static void route_point(int k, double *x, double *y)
+{
+	int part = (k / 12) % 3;
+	double bx = 400.0 * (k / 12), by = 0;
+	int j = k % 12;
+	if (part == 0) {
+		*x = bx + 30.0 * (j + 1);
+		*y = by;
+	} else if (part == 1) {
+		*x = bx + 30.0 * (j + 1);
+		*y = by + 0.2 * (j + 1) * (j + 1);
+	} else {
+		*x = bx + 30.0 * (j + 1);
+		*y = by + ((j & 1) ? 25.0 : 0.0);
+	}
+}
+
+/* The plan the pass leaves in each queued command. */
+static void assert_same_plan(const motion_t *a, const motion_t *b)
+{
+	assert_int_equal(a->q_count, b->q_count);
+	for (int i = 0; i < a->q_count; i++) {
+		const motion_cmd_t *x = &a->q[(a->q_head + i) % MOTION_QUEUE_LEN];
+		const motion_cmd_t *y = &b->q[(b->q_head + i) % MOTION_QUEUE_LEN];
+		assert_int_equal(x->vend_pt, y->vend_pt);
+		/* (the head's own line length is read by no pass) */
+		if (i > 0)
+			assert_int_equal(x->line_mm, y->line_mm);
+		if (!x->has_corner)
+			continue;
+		assert_int_equal(x->line_extra_mm, y->line_extra_mm);
+		assert_int_equal(x->corner_extra_mm, y->corner_extra_mm);
+		assert_int_equal(x->corner_vrot_pt, y->corner_vrot_pt);
+		assert_int_equal(x->corner_a_pt2, y->corner_a_pt2);
+	}
+}
+
+/* The pass over the whole queue, on a copy. */
+static void assert_whole_pass_agrees(const motion_t *m)
+{
+	static motion_t full;
+	full = *m;
+	motion_set_velocity(&full, full.v_t_pt * HZ, full.v_r_pt * HZ);
+	assert_int_equal(full.pass_todo, 0);
+	assert_same_plan(m, &full);
+}
+
+/* Rigs: 0 walks the whole pass in each request (hosts); 1 walks 2 commands
+ * and finishes in idle calls before the next tick; 2 walks 1 command and
+ * gets one idle call a tick, so a pass outlives several ticks. */
+static void test_plan_spread(void **state)
+{
+	(void)state;
+	static rig_t r[3];
+	for (int k = 0; k < 3; k++) {
+		rig_init(&r[k], MOTION_KIN_DIFF);
+		motion_set_velocity(&r[k].m, q(1000), q(90));
+		motion_set_accel(&r[k].m, q(200), q(180));
+	}
+	motion_set_plan_budget(&r[1].m, 2);
+	motion_set_plan_budget(&r[2].m, 1);
+	int sent = 0, pending_ticks = 0, walks = 0;
+	double lx = 0, ly = 0;
+	for (uint32_t t = 0; t < 200000; t++) {
+		/* a waypoint every 5 ms while the queue has room; the speed
+		 * lowered and raised on the way */
+		if (t % 5 == 0 && sent < 72 && motion_queue_len(&r[0].m) < 24) {
+			route_point(sent++, &lx, &ly);
+			for (int k = 0; k < 3; k++)
+				assert_true(motion_cruise_abs(&r[k].m, q(lx), q(ly)));
+			assert_whole_pass_agrees(&r[0].m);
+		}
+		if (t == 3000 || t == 9000) {
+			for (int k = 0; k < 3; k++)
+				motion_set_velocity(&r[k].m, t == 3000 ? q(400) : q(900),
+						    t == 3000 ? q(30) : q(90));
+		}
+		while (motion_plan_idle(&r[1].m))
+			walks++;
+		assert_same_plan(&r[0].m, &r[1].m);
+		if (motion_plan_idle(&r[2].m))
+			pending_ticks++;
+		for (int k = 0; k < 3; k++)
+			rig_tick(&r[k]);
+		assert_int_equal(r[1].m.ref.x_mm, r[0].m.ref.x_mm);
+		assert_int_equal(r[1].m.ref.y_mm, r[0].m.ref.y_mm);
+		assert_int_equal(r[1].m.ref.th_deg, r[0].m.ref.th_deg);
+		if (sent == 72 && !motion_has_work(&r[0].m) && !motion_has_work(&r[2].m))
+			break;
+	}
+	assert_int_equal(sent, 72);
+	for (int k = 0; k < 3; k++) {
+		assert_false(motion_has_work(&r[k].m));
+		assert_int_equal(r[k].m.ref.x_mm, q(lx));
+		assert_int_equal(r[k].m.ref.y_mm, q(ly));
+		/* never over the limits (the plans agree with the whole pass
+		 * after every request, so the lowered ones hold too) */
+		assert_true(r[k].ax_max <= 200.0 * 1.00001);
+		assert_true(r[k].v_max <= 1000.0 * 1.00001);
+	}
+	printf("plan spread: %d idle walks for the 2-command rig, %d ticks with a pass "
+	       "pending for the 1-command rig, %u and %u ticks\n",
+	       walks, pending_ticks, r[0].ticks, r[2].ticks);
+	assert_true(walks > 0);
+	assert_true(pending_ticks > 0);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -628,6 +739,7 @@ int main(void)
 	    cmocka_unit_test(test_rot_accel_lowered_while_paused),
 	    cmocka_unit_test(test_empty_command_before_cruise),
 	    cmocka_unit_test(test_stop_at_corner_brakes_along_path),
+	    cmocka_unit_test(test_plan_spread),
 	};
 	return cmocka_run_group_tests_name("motion", tests, NULL, NULL);
 }

@@ -13,6 +13,8 @@
 #include "proto/console.h"
 #include "proto/link.h"
 
+enum { PLAN_BUDGET = 2 };
+
 static loop_hal_t plant;
 static vehicle_t unit;
 static console_t con;
@@ -20,11 +22,13 @@ static link_t lnk;
 
 /* What the tick and the requests cost, in processor cycles (systick_cycles):
  * read from outside, through a debugger or QEMU's monitor (tests/mcu,
- * docs/mcu.md). A request is counted in the link poll that completed it. */
+ * docs/mcu.md). A request costs the link step that completed it: its last
+ * byte, on which the line or frame is parsed, run and answered. */
 typedef struct {
 	uint32_t ticks, tick_last, tick_worst;
 	uint64_t tick_sum;
 	uint32_t requests, req_last, req_worst;
+	uint32_t plans, plan_worst; /* idle planning calls that walked */
 } board_cost_t;
 volatile board_cost_t board_cost;
 
@@ -43,26 +47,34 @@ static __attribute__((noinline)) uint32_t unit_init(void)
 	if (vehicle_init(&unit, &cfg, &hal, NULL) != 0)
 		for (;;)
 			;
+	/* A request walks at most PLAN_BUDGET queued waypoints of the corner
+	 * speed planning, the idle passes the rest: a whole pass over the
+	 * 16-deep queue costs about a period at 25 MHz (docs/performance.md). */
+	vehicle_set_plan_budget(&unit, PLAN_BUDGET);
 	return cfg.tick_hz;
 }
 
 /* The link, one received byte at a time, until a request has run or the
  * next period has begun: however many requests a host sends at once, a tick
- * waits for one of them at most. A request is taken only once the last
- * reply has gone to the UART: a host that sends faster than the line
- * carries the answers waits, and no reply is cut short (50 $version lines
- * in one write make 4 KiB of replies, four rings' worth). Unread bytes wait
- * in the UART (a port whose receiver can overrun buffers them by interrupt
- * or DMA, see docs/mcu.md). Returns the requests completed so far. */
-static uint32_t serve_link(uint32_t done, uint32_t now_ms, uint32_t seen)
+ * waits for one of them at most, and for no more than the byte that
+ * completes it (the bytes before are taken between ticks). A request is
+ * taken only once the last reply has gone to the UART: a host that sends
+ * faster than the line carries the answers waits, and no reply is cut short
+ * (50 $version lines in one write make 4 KiB of replies, four rings' worth).
+ * Unread bytes wait in the UART (a port whose receiver can overrun buffers
+ * them by interrupt or DMA, see docs/mcu.md). Returns the requests completed
+ * so far; *cost: the cycles of the step that completed the last of them. */
+static uint32_t serve_link(uint32_t done, uint32_t now_ms, uint32_t seen, uint32_t *cost)
 {
 	uint8_t b;
 	uint32_t r = seen;
 
 	while (r == seen && systick_count() == done && uart_tx_pending() == 0 &&
 	       uart_link.read(NULL, &b, 1) == 1) {
+		uint32_t t0 = systick_cycles();
 		link_feed(&lnk, &b, 1, now_ms);
 		r = con.lines + lnk.fs.rx.st.frames;
+		*cost = systick_cycles() - t0;
 	}
 	frame_srv_poll(&lnk.fs, now_ms); /* the frame inter-byte timeout */
 	return r;
@@ -80,7 +92,7 @@ int main(void)
 	uint32_t period_us = 1000000u / tick_hz;
 	uint32_t seen = 0; /* requests completed so far: console lines and frames */
 	for (;;) {
-		uint32_t now = systick_count(), t0 = systick_cycles(), c, r;
+		uint32_t now = systick_count(), t0 = systick_cycles(), c = 0, r;
 		if (now != done) {
 			/* Late by several periods: the clock jumps, and the firmware
 			 * sees it. */
@@ -97,14 +109,22 @@ int main(void)
 			loop_hal_step(&plant);
 			continue;
 		}
-		r = serve_link(done, done * period_us / 1000u, seen);
+		r = serve_link(done, done * period_us / 1000u, seen, &c);
 		if (r != seen) {
-			c = systick_cycles() - t0;
 			seen = r;
 			board_cost.requests++;
 			board_cost.req_last = c;
 			if (c > board_cost.req_worst)
 				board_cost.req_worst = c;
+		} else if (systick_count() == done) {
+			/* Nothing to serve: the queue's planning goes on. */
+			t0 = systick_cycles();
+			if (vehicle_plan_idle(&unit)) {
+				c = systick_cycles() - t0;
+				board_cost.plans++;
+				if (c > board_cost.plan_worst)
+					board_cost.plan_worst = c;
+			}
 		}
 		uart_poll_tx();
 	}

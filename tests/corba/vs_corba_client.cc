@@ -425,7 +425,7 @@ void suite::run()
 	}
 	wait_ms(15000);
 	state("after two moveCruiseAbs", 0x10, "Ready");
-	pose("after two moveCruiseAbs", 200.00028504012153, 400.0029987031594, -89.99679565429688);
+	pose("after two moveCruiseAbs", 200.0001907364931, 399.9886133931577, -90.00091552734375);
 
 	{
 		Position far = {600, 0, 0}, near = {400, 0, 0};
@@ -437,7 +437,7 @@ void suite::run()
 	}
 	wait_ms(10000);
 	state("after moveContinuousRel", 0x10, "Ready");
-	pose("after moveContinuousRel", 200.00029328465462, -200.1909524272196, -90.00091552734375);
+	pose("after moveContinuousRel", 200.0001852477435, -200.19095667335205, -90.00091552734375);
 
 	// Jog: runs while commanded, stops on the 300 ms watchdog.
 	call("moveJog(0, 100, 0): y on a differential base", vs_->moveJog(0, 100, 0), false,
@@ -449,7 +449,7 @@ void suite::run()
 	state("jogging", 0x11, "Busy");
 	wait_ms(3000);
 	state("after the jog watchdog", 0x10, "Ready");
-	pose("after the jog", 200.00028763199225, -236.20115132583305, -90.00091552734375);
+	pose("after the jog", 200.00016718613915, -236.20115557312965, -90.00091552734375);
 
 	// Pause: commands queue, nothing moves until resume.
 	call("pause", vs_->pause(), true, "pause");
@@ -461,11 +461,11 @@ void suite::run()
 	}
 	wait_ms(1000);
 	state("still paused", 0x15, "Paused");
-	pose("still paused", 200.00028349645436, -236.20115131232888, -90.00091552734375);
+	pose("still paused", 200.00016718613915, -236.20115556078963, -90.00091552734375);
 	call("resume", vs_->resume(), true, "resume");
 	wait_ms(10000);
 	state("after resume", 0x10, "Ready");
-	pose("after resume", 200.0003189421259, 0.018578254617750645, -89.99954223632812);
+	pose("after resume", 200.00021760584787, 0.004196385852992535, -90.003662109375);
 
 	// Stop: decelerates at the maximum and forgets the queue.
 	call("moveForward(2000)", vs_->moveForward(2000), true, "moveForward");
@@ -473,7 +473,7 @@ void suite::run()
 	call("stop", vs_->stop(), true, "stop");
 	wait_ms(3000);
 	state("after stop", 0x10, "Ready");
-	pose("after stop", 200.00034011295065, -280.0096143465489, -89.99954223632812);
+	pose("after stop", 200.0002029875759, -280.00961514399387, -89.99954223632812);
 
 	// Contact sensor: Locked until unlock().
 	call("setDigitalSensorLock(true)", vs_->setDigitalSensorLock(true), true,

@@ -58,7 +58,7 @@ for t in "$here"/fw_*.sh; do
 			failed=$((failed + 1))
 			continue
 		fi
-		out=$("$top/tools/qemu/run-guest.sh" -i -t 400 "$t" "${extra[@]}" 2>&1)
+		out=$("$top/tools/qemu/run-guest.sh" -i -t 600 "$t" "${extra[@]}" 2>&1)
 		rc=$?
 		printf '%s\n' "$out"
 		p=$(printf '%s\n' "$out" | sed -n 's/^\[  PASSED  \] \([0-9]*\) test.*/\1/p' | awk '{s+=$1} END {print s+0}')
