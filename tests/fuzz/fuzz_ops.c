@@ -14,7 +14,8 @@
  *     (move*, resume, setJoystick(true)).
  *
  * Input bytes: a sequence of actions, each an action byte and its argument
- * bytes (missing bytes read as 0). Byte 0 picks the base (bit 0: mecanum).
+ * bytes (missing bytes read as 0). Byte 0 picks the base (bit 0: mecanum)
+ * and the corner planning budget (bits 1-2; 0: whole passes).
  */
 #include <math.h>
 #include <stdint.h>
@@ -226,8 +227,14 @@ static void check_tick(void)
 	prev_servo = v->servo;
 }
 
+/* Corner planning spread over idle calls, as on the Cortex-M board: one
+ * call between two ticks, so a pass can outlive several (0: off). */
+static uint8_t plan_budget;
+
 static void tick(void)
 {
+	if (plan_budget)
+		vehicle_plan_idle(&S.vehicle);
 	sim_tick(&S);
 	check_tick();
 }
@@ -425,14 +432,17 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	unsigned ticks = 0;
 
 	vs_config_defaults(&cfg);
-	if (u8(&r) & 1) {
+	uint8_t setup = u8(&r);
+	if (setup & 1) {
 		cfg.kinematics = VS_KIN_OMNI;
 		cfg.wheel_base_mm = 400.0;
 	}
+	plan_budget = (setup >> 1) & 3;
 	plant_params_ideal(&pp);
 	plant_config_lag(&pp, &cfg);
 	if (sim_init(&S, &cfg, &pp) != 0)
 		abort();
+	vehicle_set_plan_budget(&S.vehicle, plan_budget);
 	armed = false;
 	have_rest = false;
 	encoder_frozen = false;
