@@ -253,3 +253,32 @@ q32_t fx_hypot(q32_t x, q32_t y)
 	uint64_t r = fx_isqrt64(ax * ax + ay * ay);
 	return shift >= 0 ? (q32_t)(r << shift) : (q32_t)(r >> -shift);
 }
+
+q32_t fx_div(q32_t a, q32_t b)
+{
+	/* Magnitudes in unsigned arithmetic: |INT64_MIN| is 2^63, not UB. */
+	uint64_t ua = a < 0 ? 0u - (uint64_t)a : (uint64_t)a;
+	uint64_t ub = b < 0 ? 0u - (uint64_t)b : (uint64_t)b;
+	if (ub == 0)
+		return a >= 0 ? INT64_MAX : INT64_MIN;
+	bool neg = (a < 0) != (b < 0);
+	uint64_t q = ua / ub, r = ua % ub;
+	if (q >> 31)
+		return neg ? INT64_MIN : INT64_MAX;
+	/* The 32 fraction bits by long division, as many bits per step as the
+	 * remainder can be shifted without overflow (r < ub, so clz(ub) bits):
+	 * one hardware division for a divisor below 2^32, two or three for the
+	 * lengths of a floor. The bits are those of the bitwise long division. */
+	uint64_t res = q << 32;
+	int k = __builtin_clzll(ub);
+	if (k == 0)
+		k = 1; /* ub = 2^63: r < 2^63 still shifts by one */
+	for (int left = 32; left > 0;) {
+		int n = k < left ? k : left;
+		r <<= n;
+		left -= n;
+		res |= (r / ub) << left;
+		r %= ub;
+	}
+	return neg ? -(int64_t)res : (int64_t)res;
+}

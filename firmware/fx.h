@@ -24,12 +24,24 @@ typedef int64_t q32_t;
 #define FX_DEG_180 ((q32_t)180 << FX_SHIFT)
 #define FX_DEG_360 ((q32_t)360 << FX_SHIFT)
 
+/* A pose in the world frame (Q32 mm and degrees). */
+typedef struct {
+	q32_t x_mm, y_mm, th_deg; /* th wrapped to [-180, 180) */
+} fx_pose_t;
+
+/* Body-frame velocity for one tick: mm/tick and deg/tick, Q32. */
+typedef struct {
+	q32_t vx_pt, vy_pt, w_pt;
+} fx_twist_t;
+
 /* Integer part to Q32. */
 static inline q32_t fx_from_int(int32_t v)
 {
 	return (q32_t)((uint64_t)(int64_t)v << FX_SHIFT);
 }
 
+/* (a << 32) / b, rounded toward zero, saturating. */
+q32_t fx_div(q32_t a, q32_t b);
 /* Floor of the square root of a 64-bit unsigned value. */
 uint64_t fx_isqrt64(uint64_t v);
 /* n / d for 0 < d < 2^16 (fx.c: cheap where 64-bit division is a call). */

@@ -35,7 +35,12 @@
 #include <stdint.h>
 
 #include "fx.h"
-#include "motion.h"
+
+/* The wheel arrangement: differential (two wheels) or mecanum (four). */
+typedef enum {
+	MOTION_KIN_DIFF = 0,
+	MOTION_KIN_OMNI = 1,
+} motion_kin_t;
 
 #define KIN_MAX_WHEELS 4
 

@@ -17,25 +17,12 @@
 #include <stdint.h>
 
 #include "fx.h"
+#include "kin.h"
 #include "traj.h"
 
 #ifndef MOTION_QUEUE_LEN /* the MCU build sets a shorter queue */
 #define MOTION_QUEUE_LEN 32
 #endif
-
-typedef struct {
-	q32_t x_mm, y_mm, th_deg; /* th wrapped to [-180, 180) */
-} fx_pose_t;
-
-/* Body-frame velocity for one tick: mm/tick and deg/tick, Q32. */
-typedef struct {
-	q32_t vx_pt, vy_pt, w_pt;
-} fx_twist_t;
-
-typedef enum {
-	MOTION_KIN_DIFF = 0,
-	MOTION_KIN_OMNI = 1,
-} motion_kin_t;
 
 typedef struct {
 	uint32_t tick_hz;

@@ -124,35 +124,6 @@ q32_t traj_umax_r(q32_t d, const traj_rate_t *r)
 	return (d + tri(n, a)) / (n + 1);
 }
 
-q32_t fx_div(q32_t a, q32_t b)
-{
-	/* Magnitudes in unsigned arithmetic: |INT64_MIN| is 2^63, not UB. */
-	uint64_t ua = a < 0 ? 0u - (uint64_t)a : (uint64_t)a;
-	uint64_t ub = b < 0 ? 0u - (uint64_t)b : (uint64_t)b;
-	if (ub == 0)
-		return a >= 0 ? INT64_MAX : INT64_MIN;
-	bool neg = (a < 0) != (b < 0);
-	uint64_t q = ua / ub, r = ua % ub;
-	if (q >> 31)
-		return neg ? INT64_MIN : INT64_MAX;
-	/* The 32 fraction bits by long division, as many bits per step as the
-	 * remainder can be shifted without overflow (r < ub, so clz(ub) bits):
-	 * one hardware division for a divisor below 2^32, two or three for the
-	 * lengths of a floor. The bits are those of the bitwise long division. */
-	uint64_t res = q << 32;
-	int k = __builtin_clzll(ub);
-	if (k == 0)
-		k = 1; /* ub = 2^63: r < 2^63 still shifts by one */
-	for (int left = 32; left > 0;) {
-		int n = k < left ? k : left;
-		r <<= n;
-		left -= n;
-		res |= (r / ub) << left;
-		r %= ub;
-	}
-	return neg ? -(int64_t)res : (int64_t)res;
-}
-
 /* Unit clothoid half with total turn psi: end point (x1, y1), Q30. The
  * integrals of cos(psi u^2) and sin(psi u^2) over u in 0..1, term by term:
  * x1 = sum_k (-1)^k psi^2k / ((2k)! (4k+1)), y1 the odd powers alike, i.e.

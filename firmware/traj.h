@@ -100,9 +100,6 @@ void traj_rate_init(traj_rate_t *r, q32_t a);
 q32_t traj_brake_dist_r(q32_t u, const traj_rate_t *r);
 q32_t traj_umax_r(q32_t d, const traj_rate_t *r);
 
-/* (a << 32) / b, rounded toward zero, saturating. */
-q32_t fx_div(q32_t a, q32_t b);
-
 /* Geometry of a blended corner with tangent length t_mm and deflection
  * phi_deg (signed, |phi| < 180). */
 typedef struct {
