@@ -68,12 +68,19 @@ typedef struct {
 	traj_corner_t corner;
 } motion_cmd_t;
 
+/* The engine's modes and their names ($diag), from one table. */
+#define MOTION_MODES(X)                                                                            \
+	X(MODE_IDLE, "idle")                                                                       \
+	X(MODE_PATH, "path")		 /* executing queued path commands */                      \
+	X(MODE_JOG, "jog")		 /* velocity command with watchdog */                      \
+	X(MODE_CONTINUOUS, "continuous") /* retargetable goal */                                   \
+	X(MODE_JOYSTICK, "joystick")	 /* velocity target from the joystick */
+
 typedef enum {
-	MODE_IDLE = 0,
-	MODE_PATH,	 /* executing queued path commands */
-	MODE_JOG,	 /* velocity command with watchdog */
-	MODE_CONTINUOUS, /* retargetable goal */
-	MODE_JOYSTICK,	 /* velocity target from the joystick */
+#define MOTION_MODE_ENUM(id, name) id,
+	MOTION_MODES(MOTION_MODE_ENUM)
+#undef MOTION_MODE_ENUM
+	    MOTION_MODE_COUNT
 } motion_mode_t;
 
 typedef enum { SEG_NONE = 0, SEG_LINE, SEG_TURN, SEG_ARC, SEG_CORNER } seg_kind_t;

@@ -289,9 +289,13 @@ __attribute__((format(printf, 3, 4))) static bool reply_error(console_t *c, rbuf
 
 static const char *mode_name(uint8_t m)
 {
-	static const char *const names[] = {"idle", "path", "jog", "continuous", "joystick"};
+	static const char *const names[MOTION_MODE_COUNT] = {
+#define MOTION_MODE_NAME(id, name) [id] = (name),
+	    MOTION_MODES(MOTION_MODE_NAME)
+#undef MOTION_MODE_NAME
+	};
 
-	return m < sizeof(names) / sizeof(names[0]) ? names[m] : "?";
+	return m < MOTION_MODE_COUNT ? names[m] : "?";
 }
 
 static double q32_to_double(q32_t v)
