@@ -30,7 +30,8 @@ MCU_CPU_cortex-m0 := -mcpu=cortex-m0 -mthumb -mfloat-abi=soft
 # Boundary and initialisation code allowed to use doubles (see firmware/vs_api.c).
 FW_FLOAT_OK := firmware/vs_api.c firmware/config.c
 # The console and binary-frame parsers; the host client and CAN mapping stay on the host.
-MCU_PROTO_SRC := $(filter $(addprefix proto/,cmdtab.c console.c fmt.c numparse.c wire.c frame.c link.c),$(PROTO_SRC))
+MCU_PROTO_SRC := $(filter $(addprefix proto/,cmdtab.c dispatch.c console.c fmt.c numparse.c wire.c frame.c \
+	frame_srv.c link.c),$(PROTO_SRC))
 MCU_BOARD_SRC := $(addprefix hal/cortexm/,startup.c systick.c uart.c loop_hal.c board_main.c \
 	small_libc.c)
 

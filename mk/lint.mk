@@ -7,6 +7,8 @@
 #   clang       -Wconversion -Wshadow -Wsign-conversion -Werror on firmware/ and
 #               proto/ (the gcc build enforces the same; clang sees more)
 #   clang-format every tracked C file follows .clang-format (`make format` fixes)
+#   client      vehiclectl links no firmware object (nm): the client library
+#               uses the command table and the encodings, never the unit
 # tests/ are excluded from the analysers (cmocka macros); they build with
 # -Wall -Wextra -Werror.
 # hal/linux/ (the vehicle-fw backends, mk/linux.mk) is not in the set yet.
@@ -15,9 +17,17 @@ LINT_SRC := $(FW_SRC) $(PROTO_SRC) $(HOST_SRC) $(SIM_SRC) $(wildcard host_sim/*_
 LINT_DEFS := -std=c11 -I. -D_GNU_SOURCE
 CLANG ?= clang
 
-.PHONY: lint lint-cppcheck lint-tidy lint-warnings lint-format
+.PHONY: lint lint-cppcheck lint-tidy lint-warnings lint-format lint-client
 
-lint: lint-format lint-cppcheck lint-warnings lint-tidy
+lint: lint-format lint-cppcheck lint-warnings lint-tidy lint-client
+
+# Every global symbol firmware/ defines, looked for in vehiclectl.
+lint-client: $(BUILD)/vehiclectl $(FW_LIB)
+	@echo "  NM      vehiclectl links no firmware"
+	$(Q)nm -g --defined-only $(FW_LIB) | awk 'NF == 3 { print $$3 }' | sort -u >$(BUILD)/fw-symbols
+	$(Q)hit=$$(nm -g --defined-only $(BUILD)/vehiclectl | awk 'NF == 3 { print $$3 }' | \
+		sort -u | comm -12 - $(BUILD)/fw-symbols); \
+	if [ -n "$$hit" ]; then echo "vehiclectl links firmware:" $$hit; exit 1; fi
 
 lint-format:
 	@echo "  FORMAT  .clang-format"

@@ -3,7 +3,7 @@
  *
  * Every operation's in and out arguments are listed with a type code each
  * (CMD_T_*), so a transport can encode and decode any operation generically
- * into cmd_value_t arrays and run it with cmd_invoke().
+ * into cmd_value_t arrays and run it with cmd_invoke() (dispatch.h).
  *
  * Table checksum (cmd_table_crc): CRC-16/CCITT-FALSE (poly 0x1021, init
  * 0xFFFF, no reflection, no final xor) over the rows in opcode order, each
@@ -102,13 +102,5 @@ typedef struct {
 	vs_alarm_t alarms[VS_ALARM_LIST_MAX];
 	char msg[VS_STATE_MSG_MAX];
 } cmd_scratch_t;
-
-/* Runs one operation: in[] holds d->n_in values of d->in_types, out[]
- * receives d->n_out values (always all of them, zero/empty when the
- * operation leaves one unset). Returns the operation's boolean. The alarm
- * sequence of getActiveAlarm is clamped to max(numOfAlarm, 0) and to
- * VS_ALARM_LIST_MAX entries. */
-bool cmd_invoke(vehicle_t *v, const cmd_def_t *d, const cmd_value_t in[], cmd_value_t out[],
-		cmd_scratch_t *scratch);
 
 #endif

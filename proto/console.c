@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "cmdtab.h"
+#include "dispatch.h"
 #include "fmt.h"
 #include "numparse.h"
 

@@ -1,4 +1,5 @@
-/* Frame codec, resynchronising receiver and the unit's frame server. */
+/* Frame codec and resynchronising receiver (host and unit); the unit's
+ * frame server is frame_srv.c. */
 #include "frame.h"
 
 #include <string.h>
@@ -190,77 +191,4 @@ void frame_rx_poll(frame_rx_t *rx, uint32_t now_ms)
 	memmove(rx->buf, rx->buf + 1, rx->n - 1);
 	rx->n--;
 	scan(rx, true);
-}
-
-static void srv_nak(frame_srv_t *s, uint8_t seq, uint8_t op, int status)
-{
-	uint8_t out[FRAME_OVERHEAD + 1];
-	size_t n = frame_encode_response(out, sizeof(out), seq, op, (uint8_t)status, NULL, 0);
-
-	s->st.naks++;
-	if (s->write && n)
-		s->write(s->wctx, out, n);
-}
-
-static void srv_frame(void *ctx, const frame_t *f)
-{
-	frame_srv_t *s = ctx;
-	uint8_t resp[WIRE_RESP_MAX];
-	size_t n;
-	int st = WIRE_ST_OK;
-
-	if (f->status != WIRE_ST_OK) {
-		/* The opcode of a damaged frame cannot be trusted: answer with 0.
-		 * The seq is the one received, 0 when the frame ended before it. */
-		srv_nak(s, f->seq, 0, f->status);
-		return;
-	}
-	if (f->op & FRAME_RESP_FLAG) {
-		/* A response travelling the wrong way (echo, loopback): not a
-		 * request, and answering it could ping-pong. */
-		s->st.naks++;
-		return;
-	}
-	if (s->have_last && f->seq == s->last_seq && f->op == s->last_op && f->crc == s->last_crc) {
-		s->st.duplicates++;
-		vehicle_link_heard(s->v, VS_LINK_FRAMES);
-		if (s->write)
-			s->write(s->wctx, s->last_resp, s->last_len);
-		return;
-	}
-	n = wire_dispatch(s->v, f->op, f->payload, f->len, resp, sizeof(resp), &st);
-	if (st != WIRE_ST_OK) {
-		srv_nak(s, f->seq, f->op, st);
-		return;
-	}
-	s->st.executed++;
-	vehicle_link_heard(s->v, VS_LINK_FRAMES);
-	s->last_len = frame_encode_response(s->last_resp, sizeof(s->last_resp), f->seq, f->op,
-					    WIRE_ST_OK, resp, n);
-	s->have_last = s->last_len > 0;
-	s->last_seq = f->seq;
-	s->last_op = f->op;
-	s->last_crc = f->crc;
-	if (s->write && s->last_len)
-		s->write(s->wctx, s->last_resp, s->last_len);
-}
-
-static void srv_other(void *ctx, const uint8_t *data, size_t n)
-{
-	frame_srv_t *s = ctx;
-
-	if (s->other)
-		s->other(s->octx, data, n);
-}
-
-void frame_srv_init(frame_srv_t *s, vehicle_t *v, frame_write_fn write, void *wctx,
-		    frame_other_fn on_other, void *octx)
-{
-	memset(s, 0, sizeof(*s));
-	s->v = v;
-	s->write = write;
-	s->wctx = wctx;
-	s->other = on_other;
-	s->octx = octx;
-	frame_rx_init(&s->rx, s->rxbuf, FRAME_REQ_PAYLOAD_MAX, srv_frame, srv_other, s);
 }

@@ -97,13 +97,4 @@ int wire_decode_response(const cmd_def_t *d, const uint8_t *buf, size_t len, boo
 /* The WIRE_OP_INFO response payload (buf has room for WIRE_INFO_LEN). */
 size_t wire_info(uint8_t *buf);
 
-/* Server side of every binary link: decodes the request payload of opcode,
- * runs the operation (cmd_invoke) and encodes the response payload into
- * resp. Returns the response length with *status = WIRE_ST_OK, or 0 with
- * the NAK reason in *status (unknown opcode, bad length or value); in that
- * case nothing was executed. WIRE_OP_INFO is answered here too.
- * cap >= WIRE_RESP_MAX always suffices. */
-size_t wire_dispatch(vehicle_t *v, unsigned opcode, const uint8_t *req, size_t len, uint8_t *resp,
-		     size_t cap, int *status);
-
 #endif

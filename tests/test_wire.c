@@ -9,6 +9,7 @@
 #include <cmocka.h>
 
 #include "../host_sim/sim.h"
+#include "../proto/dispatch.h"
 #include "../proto/wire.h"
 
 static void test_scalars_exact_bytes(void **state)
