@@ -1,16 +1,26 @@
-/* Command link byte stream (serial console and binary frames).
- * read returns the number of bytes copied (0: nothing pending), never blocks;
- * write queues bytes and returns the number accepted. */
+/* The link types a platform moves: the command link's byte stream (serial
+ * console and binary frames) and a classic CAN frame (the CAN command link,
+ * CAN drives). */
 #ifndef HAL_LINK_H
 #define HAL_LINK_H
 
 #include <stddef.h>
 #include <stdint.h>
 
+/* Command link byte stream. read returns the number of bytes copied (0:
+ * nothing pending), never blocks; write queues bytes and returns the number
+ * accepted. */
 typedef struct {
 	size_t (*read)(void *ctx, uint8_t *buf, size_t max);
 	size_t (*write)(void *ctx, const uint8_t *buf, size_t len);
 	void *ctx;
 } vs_link_t;
+
+/* A classic CAN data frame. */
+typedef struct {
+	uint32_t id; /* 11-bit standard identifier */
+	uint8_t dlc; /* 0..8 */
+	uint8_t data[8];
+} canlink_frame_t;
 
 #endif

@@ -12,7 +12,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "../proto/canlink.h"
+#include "link.h"
 
 typedef struct {
 	int fd;

@@ -42,13 +42,8 @@
 #include <stdint.h>
 
 #include "../firmware/vehicle.h"
+#include "../hal/link.h"
 #include "wire.h"
-
-typedef struct {
-	uint32_t id; /* 11-bit standard identifier */
-	uint8_t dlc; /* 0..8 */
-	uint8_t data[8];
-} canlink_frame_t;
 
 /* Identifier bases; the node id is added. */
 #define CANLINK_ID_STATUS_A  0x180u
