@@ -77,8 +77,10 @@ int main(void)
 
 	vs_config_defaults(&cfg);
 	plant_params_default(&pp);
-	if (!c || sim_init(&S, &cfg, &pp) != 0 || openpty(&M, &s, NULL, NULL, NULL) != 0)
+	if (!c || sim_init(&S, &cfg, &pp) != 0 || openpty(&M, &s, NULL, NULL, NULL) != 0) {
+		free(c);
 		return 1;
+	}
 	vc_tty_set_raw(s, 115200);
 	vc_tty_set_raw(M, 0);
 	fcntl(M, F_SETFL, fcntl(M, F_GETFL) | O_NONBLOCK);
@@ -90,6 +92,8 @@ int main(void)
 	for (int i = 0; i < N; i++)
 		if (vc_getPosition(c, NULL, &pos) != VC_OK) {
 			fprintf(stderr, "linkbench: getPosition failed\n");
+			vc_close(c);
+			free(c);
 			return 1;
 		}
 	rt = (now_s() - t0) / N;

@@ -287,6 +287,8 @@ int main(int argc, char **argv)
 		return 2;
 	}
 	rt_log_open(use_syslog);
+	if (!config_path) /* getopt gives every -c an argument; the analyser cannot know */
+		config_path = DEFAULT_CONFIG;
 	if (!io_path) {
 		const char *slash = strrchr(config_path, '/');
 		int dir = slash ? (int)(slash - config_path + 1) : 0;

@@ -203,7 +203,8 @@ static int modbus_elem(bctx_t *c, const XML_Char **a)
 			if (get_uint(c, "modbus", "baud", a[1], 1200, 4000000, &m.baud))
 				return -1;
 		} else if (!strcmp(a[0], "parity")) {
-			if (strcmp(a[1], "N") && strcmp(a[1], "E") && strcmp(a[1], "O"))
+			if (strcmp(a[1], "N") != 0 && strcmp(a[1], "E") != 0 &&
+			    strcmp(a[1], "O") != 0)
 				return fail(c, "modbus.parity: N, E or O '%s'", a[1]);
 			m.parity = a[1][0];
 		} else if (!strcmp(a[0], "stop_bits")) {
@@ -499,9 +500,11 @@ static void XMLCALL on_start(void *ud, const XML_Char *name, const XML_Char **at
 	}
 	if (!c->in_backends)
 		return; /* the core loader judges the rest */
-	if (depth != 2)
+	if (depth != 2) {
 		fail(c, "%s: unknown element", name);
-	else if (!strcmp(name, "drive"))
+		return;
+	}
+	if (!strcmp(name, "drive"))
 		drive_elem(c, atts);
 	else if (!strcmp(name, "modbus"))
 		modbus_elem(c, atts);

@@ -10,6 +10,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <linux/input.h>
+#include <limits.h>
 #include <linux/uinput.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -80,12 +81,14 @@ int main(void)
 
 	char line[64];
 	while (fgets(line, sizeof(line), stdin)) {
-		char axis;
-		int v;
+		char axis = line[0], *end = NULL;
+		long v = 0;
 		if (!strncmp(line, "quit", 4))
 			break;
-		if (sscanf(line, "%c %d", &axis, &v) == 2 && strchr("xyr", axis)) {
-			emit(fd, EV_ABS, codes[axis == 'x' ? 0 : axis == 'y' ? 1 : 2], v);
+		if (axis && strchr("xyr", axis))
+			v = strtol(line + 1, &end, 10);
+		if (end && end != line + 1 && v >= INT_MIN && v <= INT_MAX) {
+			emit(fd, EV_ABS, codes[axis == 'x' ? 0 : axis == 'y' ? 1 : 2], (int)v);
 			emit(fd, EV_SYN, SYN_REPORT, 0);
 			printf("ok\n");
 		} else {
