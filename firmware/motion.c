@@ -206,8 +206,8 @@ static inline __attribute__((always_inline)) void pop(motion_t *m)
 	m->q_count--;
 	if (m->stop_drop)
 		m->stop_drop--;
-	if (m->pass_todo && --m->pass_todo == 0)
-		m->pass_caps = false;
+	if (m->pass_todo)
+		m->pass_todo--;
 	limits_changed(m);
 }
 
@@ -363,7 +363,6 @@ static void pass_walk(motion_t *m, int i, uint8_t lo, q32_t next_v, q32_t next_e
 	traj_rate_init(&at, m->a_t_pt2);
 	uint32_t left = m->plan_budget ? m->plan_budget : UINT32_MAX;
 	for (; i >= 0; i--) {
-		bool pending = i < (int)m->pass_todo;
 		if (i + 1 < (int)lo && next_same)
 			return; /* older pending work, if any, stays pending */
 		if (!(lo > 0 && i + 1 >= (int)lo) && left-- == 0) {
@@ -377,15 +376,6 @@ static void pass_walk(motion_t *m, int i, uint8_t lo, q32_t next_v, q32_t next_e
 			if (c->kind == MCMD_CRUISE)
 				c->vend_pt = 0;
 			continue;
-		}
-		if (i >= (int)lo || (pending && m->pass_caps)) {
-			/* A corner's own caps: kept below lo (same corner, same limits) */
-			c->corner_vrot_pt = corner_vrot(m, c);
-			/* A collinear pass (no corner piece) brakes at the line's rate. */
-			c->corner_a_pt2 =
-			    fx_max64(c->corner.lh_mm > 0 ? fx_min64(m->a_t_pt2, c->corner.acc_pt2)
-							 : m->a_t_pt2,
-				     1);
 		}
 		c->corner_extra_mm = 0;
 		q32_t v = fx_min64(vt_eff(m), c->corner_vrot_pt);
@@ -408,7 +398,6 @@ static void pass_walk(motion_t *m, int i, uint8_t lo, q32_t next_v, q32_t next_e
 		next_extra = c->line_extra_mm;
 	}
 	m->pass_todo = 0;
-	m->pass_caps = false;
 }
 
 /* Lower each corner's speed so the unit can brake to the next corner's speed
@@ -421,12 +410,21 @@ static void backward_pass_from(motion_t *m, uint8_t lo)
 	if (vt_eff(m) != m->pass_vt)
 		lo = 0; /* every corner speed follows a new line speed */
 	m->pass_vt = vt_eff(m);
-	if (lo == 0)
-		m->pass_caps = true; /* until walked, every corner's caps are stale */
 	for (uint8_t i = lo; i < m->q_count; i++) {
 		motion_cmd_t *c = q_at(m, i);
-		if (c->kind == MCMD_CRUISE && c->start_known)
+		if (c->kind != MCMD_CRUISE)
+			continue;
+		if (c->start_known)
 			c->line_mm = cruise_line_len(m, i);
+		if (!c->has_corner)
+			continue;
+		/* A corner's own caps, here and never left pending: the running
+		 * piece reads them (a lower rotation limit holds at once). Below
+		 * lo they stand (same corner, same limits). */
+		c->corner_vrot_pt = corner_vrot(m, c);
+		/* A collinear pass (no corner piece) brakes at the line's rate. */
+		c->corner_a_pt2 = fx_max64(
+		    c->corner.lh_mm > 0 ? fx_min64(m->a_t_pt2, c->corner.acc_pt2) : m->a_t_pt2, 1);
 	}
 	pass_walk(m, (int)m->q_count - 1, lo, 0, 0, false);
 }
@@ -659,7 +657,6 @@ void motion_halt(motion_t *m)
 	m->q_count = 0;
 	m->stop_drop = 0;
 	m->pass_todo = 0;
-	m->pass_caps = false;
 	limits_changed(m);
 	m->seg.kind = SEG_NONE;
 	m->v = 0;

@@ -125,7 +125,6 @@ typedef struct {
 	q32_t pass_vt;	     /* the line speed the corner speeds were planned for */
 	uint8_t plan_budget; /* commands a pass walks per call (0: all) */
 	uint8_t pass_todo;   /* the queue's first pass_todo commands await the pass */
-	bool pass_caps;	     /* ... and their corners' caps with it */
 
 	seg_t seg; /* active piece (mode PATH) */
 	q32_t v;   /* speed along the active piece, per tick */

@@ -50,8 +50,13 @@
  * that the unit can always brake to the next corner's speed and to a stop
  * at the last waypoint. Queueing a waypoint can only raise the corner
  * speeds before it, so the pass stops at the first corner that keeps its
- * speed, and a pass left unfinished (motion_set_plan_budget) leaves speeds
- * that are lower than planned, never higher: safe to run on.
+ * speed. A pass left unfinished (motion_set_plan_budget) leaves the corners
+ * it has not reached as they were. Their caps (rotation rate, rotational
+ * acceleration) are set before any pass and never wait, and what they keep
+ * is safe to run on: a queued waypoint or a raised limit only raises the
+ * speeds a whole pass gives, a lowered line speed caps every piece at once,
+ * and a lower acceleration (accepted at rest only) leaves braking distances
+ * that are shorter than the new ones, which only slows the unit.
  * The engine integrates the reference through a corner at each step's
  * midpoint heading; with the heading exact, the integration arrives within
  * nanometres of the exit T beyond the waypoint, and the corner ends on that
