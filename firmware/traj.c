@@ -20,6 +20,18 @@ static q32_t g_of(q32_t u, q32_t a)
 	return u + traj_brake_dist(u, a);
 }
 
+/* Umax's step count, the largest n with T(n) <= d, given q = floor(d / a):
+ * n ~ sqrt(2 q), then corrected by whole steps. */
+static int64_t umax_steps(q32_t d, q32_t a, uint64_t q)
+{
+	int64_t n = (int64_t)fx_isqrt64(2 * q);
+	while (n > 0 && tri(n, a) > d)
+		n--;
+	while (tri(n + 1, a) <= d)
+		n++;
+	return n;
+}
+
 q32_t traj_umax_near(q32_t d, q32_t a, int64_t *n_guess)
 {
 	if (d <= 0)
@@ -30,13 +42,7 @@ q32_t traj_umax_near(q32_t d, q32_t a, int64_t *n_guess)
 	if (n >= 1 && tri(n, a) > d && tri(n - 1, a) <= d) {
 		n--; /* braking: one step fewer than the tick before */
 	} else if (n < 0 || tri(n, a) > d || tri(n + 1, a) <= d) {
-		/* n ~ sqrt(2 d / a), then correct by whole steps. */
-		uint64_t q = (uint64_t)(d / a);
-		n = (int64_t)fx_isqrt64(2 * q);
-		while (n > 0 && tri(n, a) > d)
-			n--;
-		while (tri(n + 1, a) <= d)
-			n++;
+		n = umax_steps(d, a, (uint64_t)(d / a));
 	}
 	*n_guess = n;
 	return (d + tri(n, a)) / (n + 1);
@@ -114,11 +120,7 @@ q32_t traj_umax_r(q32_t d, const traj_rate_t *r)
 		return 0;
 	if (a <= 0)
 		return d;
-	int64_t n = (int64_t)fx_isqrt64(2 * (uint64_t)rate_div(r, d));
-	while (n > 0 && tri(n, a) > d)
-		n--;
-	while (tri(n + 1, a) <= d)
-		n++;
+	int64_t n = umax_steps(d, a, (uint64_t)rate_div(r, d));
 	if (n + 1 < 0x10000)
 		return (q32_t)fx_udiv64_small((uint64_t)(d + tri(n, a)), (uint32_t)(n + 1));
 	return (d + tri(n, a)) / (n + 1);

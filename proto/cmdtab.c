@@ -27,21 +27,6 @@ const cmd_def_t cmd_table[CMD_COUNT] = {
 #undef VS_CMD
 };
 
-static int lower(unsigned char ch)
-{
-	return (ch >= 'A' && ch <= 'Z') ? ch - 'A' + 'a' : ch;
-}
-
-/* strcmp, ignoring ASCII case */
-static int cmp_nocase(const char *a, const char *b)
-{
-	while (*a && lower((unsigned char)*a) == lower((unsigned char)*b)) {
-		a++;
-		b++;
-	}
-	return lower((unsigned char)*a) - lower((unsigned char)*b);
-}
-
 /* The table's rows by name: a lookup is a binary search (comparing with
  * every row cost a microcontroller up to 1,700 instructions a request). */
 static uint8_t by_name[CMD_COUNT];
@@ -52,7 +37,8 @@ static void by_name_sort(void)
 	for (unsigned i = 0; i < CMD_COUNT; i++) {
 		unsigned j = i;
 
-		for (; j > 0 && cmp_nocase(cmd_table[by_name[j - 1]].name, cmd_table[i].name) > 0;
+		for (;
+		     j > 0 && np_cmp_nocase(cmd_table[by_name[j - 1]].name, cmd_table[i].name) > 0;
 		     j--)
 			by_name[j] = by_name[j - 1];
 		by_name[j] = (uint8_t)i;
@@ -68,7 +54,7 @@ const cmd_def_t *cmd_by_name(const char *name)
 		by_name_sort();
 	while (lo < hi) {
 		unsigned mid = (lo + hi) / 2;
-		int c = cmp_nocase(name, cmd_table[by_name[mid]].name);
+		int c = np_cmp_nocase(name, cmd_table[by_name[mid]].name);
 
 		if (c == 0)
 			return &cmd_table[by_name[mid]];

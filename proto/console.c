@@ -96,36 +96,63 @@ static bool needs_hex(unsigned char b)
 	return b < 0x20 || b >= 0x7f;
 }
 
-/* A double-quoted string: \" and \\ escaped, and control or non-ASCII bytes
- * as \xHH so that a reply is always one printable line. */
+/* Written as it is inside quotes. */
+static bool plain_byte(unsigned char b)
+{
+	return !needs_hex(b) && b != '"' && b != '\\';
+}
+
+/* A byte that is not plain, escaped into e: \" and \\, or \xHH for control
+ * and non-ASCII bytes, so that a reply is always one printable line. */
+static size_t escape_byte(char e[4], unsigned char b)
+{
+	static const char hex[] = "0123456789ABCDEF";
+
+	e[0] = '\\';
+	if (b == '"' || b == '\\') {
+		e[1] = (char)b;
+		return 2;
+	}
+	e[1] = 'x';
+	e[2] = hex[b >> 4];
+	e[3] = hex[b & 15];
+	return 4;
+}
+
+/* A double-quoted string (escape_byte). */
 static void rb_quoted(rbuf_t *r, const char *s)
 {
 	rb_puts(r, "\"");
 	for (const unsigned char *p = (const unsigned char *)s; *p;) {
 		const unsigned char *run = p;
+		char e[4];
 
 		/* Plain bytes in one copy: a byte at a time costs a reply of
 		 * alarm texts thousands of instructions on a microcontroller. */
-		while (*p && *p != '"' && *p != '\\' && !needs_hex(*p))
+		while (*p && plain_byte(*p))
 			p++;
 		rb_putn(r, (const char *)run, (size_t)(p - run));
 		if (!*p)
 			break;
-		if (*p == '"' || *p == '\\') {
-			char e[2] = {'\\', (char)*p};
-			rb_putn(r, e, 2);
-		} else {
-			rb_printf(r, "\\x%02X", *p);
-		}
+		rb_putn(r, e, escape_byte(e, *p));
 		p++;
 	}
 	rb_puts(r, "\"");
 }
 
-/* Written as it is inside quotes. */
-static bool plain_byte(unsigned char b)
+/* v in decimal at d, no terminator: its length (at most 20). */
+static size_t put_uint(char *d, unsigned long v)
 {
-	return !needs_hex(b) && b != '"' && b != '\\';
+	char tmp[20];
+	size_t k = 0, n;
+
+	do {
+		tmp[k++] = (char)('0' + v % 10);
+		v /= 10;
+	} while (v);
+	for (n = 0; k;)
+		d[n++] = tmp[--k];
+	return n;
 }
 
 static const char *alarm_type_name(uint8_t t)
@@ -145,21 +172,16 @@ static const char *alarm_type_name(uint8_t t)
  * need not be terminated by whoever filled it (VS_ALARM_SOURCE_MAX). */
 static size_t put_alarm(char *d, const char *end, const vs_alarm_t *a)
 {
-	char *p = d, num[12];
-	unsigned k = 0;
-	unsigned long code = a->code;
+	char *p = d, num[20];
+	size_t k = put_uint(num, a->code);
 	const char *t = alarm_type_name(a->type);
 	size_t tl = strlen(t);
 
-	do {
-		num[k++] = (char)('0' + code % 10);
-		code /= 10;
-	} while (code);
 	if ((size_t)(end - p) < 1 + k + 1 + tl + 2)
 		return 0;
 	*p++ = ' ';
-	while (k)
-		*p++ = num[--k];
+	memcpy(p, num, k);
+	p += k;
 	*p++ = ' ';
 	for (size_t q = 0; q < tl; q++)
 		*p++ = t[q];
@@ -176,22 +198,22 @@ static size_t put_alarm(char *d, const char *end, const vs_alarm_t *a)
 		p += j - i;
 		if (j >= VS_ALARM_SOURCE_MAX - 1 || !a->source[j])
 			break;
-		unsigned char ch = (unsigned char)a->source[j];
-		bool pair = ch == '"' || ch == '\\';
-		if ((size_t)(end - p) < (pair ? 2u : 4u) + 1)
+		char e[4];
+		size_t el = escape_byte(e, (unsigned char)a->source[j]);
+		if ((size_t)(end - p) < el + 1)
 			return 0;
-		*p++ = '\\';
-		if (pair) {
-			*p++ = (char)ch;
-		} else {
-			static const char hex[] = "0123456789ABCDEF";
-			*p++ = 'x';
-			*p++ = hex[ch >> 4];
-			*p++ = hex[ch & 15];
-		}
+		memcpy(p, e, el);
+		p += el;
 	}
 	*p++ = '"';
 	return (size_t)(p - d);
+}
+
+/* " k", the alarm sequence's length */
+static size_t put_count(char *d, uint16_t k)
+{
+	d[0] = ' ';
+	return 1 + put_uint(d + 1, k);
 }
 
 /* The alarm sequence: its length, then "code type "source"" triples. When
@@ -202,18 +224,6 @@ static size_t put_alarm(char *d, const char *end, const vs_alarm_t *a)
  * One pass over each source: measuring first and then copying cost a
  * microcontroller 2,500 instructions an alarm, a reply of 12 alarms two
  * control periods. */
-static size_t put_count(char *d, uint16_t k)
-{
-	d[0] = ' ';
-	if (k < 10) {
-		d[1] = (char)('0' + k);
-		return 2;
-	}
-	d[1] = (char)('0' + k / 10);
-	d[2] = (char)('0' + k % 10);
-	return 3;
-}
-
 static void rb_alarms(rbuf_t *r, const cmd_alarms_t *s)
 {
 	uint16_t n = s->n > VS_ALARM_LIST_MAX ? VS_ALARM_LIST_MAX : s->n;
@@ -433,9 +443,9 @@ static bool is_space(char ch)
 	return ch == ' ' || ch == '\t' || ch == '\r' || ch == '\n';
 }
 
-/* One line of len bytes (it may hold NUL bytes, which are garbage). */
-/* Runs one line; the reply goes to r (its length kept: a strlen over a long
- * reply cost a microcontroller 1,500 instructions). */
+/* One line of len bytes (it may hold NUL bytes, which are garbage); the
+ * reply goes to r, which keeps its length (a strlen over a long reply cost a
+ * microcontroller 1,500 instructions). */
 static bool exec_line(console_t *c, const char *line, size_t len, rbuf_t *r)
 {
 	char buf[CONSOLE_LINE_MAX + 1];

@@ -191,13 +191,18 @@ static char lower(char c)
 	return (c >= 'A' && c <= 'Z') ? (char)(c - 'A' + 'a') : c;
 }
 
-bool np_streq_nocase(const char *a, const char *b)
+int np_cmp_nocase(const char *a, const char *b)
 {
 	while (*a && lower(*a) == lower(*b)) {
 		a++;
 		b++;
 	}
-	return lower(*a) == lower(*b);
+	return (unsigned char)lower(*a) - (unsigned char)lower(*b);
+}
+
+bool np_streq_nocase(const char *a, const char *b)
+{
+	return np_cmp_nocase(a, b) == 0;
 }
 
 bool np_parse_bool(const char *s, bool *out)

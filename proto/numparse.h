@@ -37,6 +37,8 @@ np_result_t np_parse_int(const char *s, int64_t min, int64_t max, int64_t *out);
 bool np_parse_bool(const char *s, bool *out);
 /* ASCII case-insensitive equality. */
 bool np_streq_nocase(const char *a, const char *b);
+/* strcmp ignoring ASCII case: < 0, 0 or > 0 */
+int np_cmp_nocase(const char *a, const char *b);
 
 /* Room buf needs, including the NUL: "-" + 20 digits; "-" + 309 integer
  * digits + ".000" (DBL_MAX). */
