@@ -47,8 +47,11 @@ CFLAGS_tools := $(CFLAGS_BASE) $(HOST_DEFS)
 CFLAGS_tests := $(CFLAGS_BASE) $(HOST_DEFS) -Wno-missing-prototypes
 
 FW_SRC := $(wildcard firmware/*.c)
-PROTO_SRC := $(wildcard proto/*.c)
-HOST_SRC := $(wildcard hal/*.c)
+# proto/: the unit's side and what it shares with hosts; proto/client/: the
+# host's client library. hal/posix/: host support (configuration reader,
+# SocketCAN, tty, clock, log) for the Linux main, the simulator and tools.
+PROTO_SRC := $(wildcard proto/*.c proto/client/*.c)
+HOST_SRC := $(wildcard hal/posix/*.c)
 SIM_SRC := $(filter-out %_main.c,$(wildcard host_sim/*.c))
 TEST_SRC := $(wildcard tests/test_*.c)
 TEST_SUPPORT_SRC := $(filter-out tests/test_%,$(wildcard tests/*.c))

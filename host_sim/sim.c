@@ -31,14 +31,13 @@ int sim_init_ex(sim_t *s, const vs_config_t *cfg, const plant_params_t *pp, cons
 		*bad_field = bad;
 	if (rc < 0)
 		return rc;
-	console_init(&s->console, &s->vehicle, discard_output, NULL);
-	console_set_extra(&s->console, sim_extra, s);
+	server_init(&s->srv, &s->vehicle, sim_extra, s, discard_output, NULL);
 	return 0;
 }
 
 bool sim_exec(sim_t *s, const char *line, char *reply, size_t cap)
 {
-	return console_exec(&s->console, line, reply, cap);
+	return console_exec(&s->srv.con, line, reply, cap);
 }
 
 void sim_tick(sim_t *s)
@@ -76,8 +75,8 @@ void sim_set_realtime(sim_t *s, bool on)
 
 void sim_set_output(sim_t *s, console_write_fn fn, void *ctx)
 {
-	s->console.write = fn ? fn : discard_output;
-	s->console.wctx = ctx;
+	s->srv.con.write = fn ? fn : discard_output;
+	s->srv.con.wctx = ctx;
 }
 
 void sim_set_trace(sim_t *s, trace_t *t)

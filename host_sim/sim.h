@@ -35,7 +35,7 @@
 #include <stdint.h>
 
 #include "../firmware/vehicle.h"
-#include "../proto/console.h"
+#include "../proto/server.h"
 #include "plant.h"
 #include "sim_hal.h"
 #include "trace.h"
@@ -50,7 +50,7 @@ struct sim {
 	plant_t plant;
 	vs_hal_t hal;
 	vehicle_t vehicle;
-	console_t console;
+	vs_server_t srv; /* the console; vehicle-sim attaches its links here */
 	uint64_t ticks;
 	uint64_t now_us; /* simulated time; the firmware sees it modulo 2^32 */
 	sim_tick_fn on_tick;

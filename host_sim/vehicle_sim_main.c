@@ -20,11 +20,12 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "../hal/config_xml.h"
-#include "../proto/client.h"
-#include "../proto/link.h"
+#include "../hal/posix/config_xml.h"
+#include "../hal/posix/rt.h"
+#include "../hal/posix/socketcan.h"
+#include "../hal/posix/tty.h"
+#include "../proto/server.h"
 #include "sim.h"
-#include "sim_can.h"
 
 #define INBUF 4096
 
@@ -42,15 +43,16 @@ typedef struct {
 	size_t in_len;
 	bool eof;
 	bool write_failed;
-	/* --can: the CAN link, served every tick; the simulator then runs
-	 * until a signal even after stdin ends. */
-	sim_can_t can;
+	/* The unit's links are the simulator's server (sim.srv).
+	 * --can: the CAN link's socket, served every tick; the simulator then
+	 * runs until a signal even after stdin ends. */
+	sockcan_t can;
+	canlink_t canlink;
 	bool can_on;
 	/* --pty: console and binary frames on a pseudo-terminal (proto/link.h)
 	 * instead of stdin/stdout; runs until a signal. */
 	bool pty_on;
 	int pty_master, pty_slave;
-	link_t link;
 } app_t;
 
 static app_t app;
@@ -60,18 +62,6 @@ static void write_stdout(void *ctx, const char *s, size_t n)
 	app_t *a = ctx;
 	if (fwrite(s, 1, n, stdout) != n || fflush(stdout) != 0)
 		a->write_failed = true;
-}
-
-static void ts_add_ns(struct timespec *t, long long ns)
-{
-	long long v = (long long)t->tv_nsec + ns;
-	t->tv_sec += (time_t)(v / 1000000000LL);
-	t->tv_nsec = (long)(v % 1000000000LL);
-}
-
-static bool ts_before(const struct timespec *a, const struct timespec *b)
-{
-	return a->tv_sec < b->tv_sec || (a->tv_sec == b->tv_sec && a->tv_nsec < b->tv_nsec);
 }
 
 /* Feeds complete lines from the input buffer. At EOF a last line without an ending is completed. A
@@ -88,11 +78,11 @@ static void feed_lines(app_t *a)
 			return; /* wait for the rest of the line */
 		}
 		bool ended = a->in[n - 1] == '\n' || a->in[n - 1] == '\r';
-		console_feed(&a->sim.console, (const uint8_t *)a->in, n);
+		console_feed(&a->sim.srv.con, (const uint8_t *)a->in, n);
 		memmove(a->in, a->in + n, a->in_len - n);
 		a->in_len -= n;
 		if (a->eof && a->in_len == 0 && !ended)
-			console_feed(&a->sim.console, (const uint8_t *)"\n", 1);
+			console_feed(&a->sim.srv.con, (const uint8_t *)"\n", 1);
 	}
 }
 
@@ -142,7 +132,7 @@ static int pty_open(app_t *a, unsigned baud, char *path, size_t cap)
 		return -1;
 	snprintf(path, cap, "%s", name);
 	a->pty_slave = open(path, O_RDWR | O_NOCTTY);
-	if (a->pty_slave < 0 || vc_tty_set_raw(a->pty_slave, baud) != 0)
+	if (a->pty_slave < 0 || tty_set_raw(a->pty_slave, baud) != 0)
 		return -1;
 	{
 		struct termios t;
@@ -186,7 +176,7 @@ static int run_pty_fast(app_t *a)
 			return 1;
 		}
 		if (p[0].revents & POLLIN)
-			link_poll(&a->link, (uint32_t)(a->sim.now_us / 1000u));
+			server_poll(&a->sim.srv, (uint32_t)a->sim.now_us);
 		if (!(p[1].revents & (POLLIN | POLLHUP | POLLERR)))
 			continue;
 		if (!read_input(a))
@@ -221,16 +211,16 @@ static int run_pty_fast(app_t *a)
 	return 0;
 }
 
+/* The plant and the unit tick on simulated time, one period per wall
+ * period; far behind (a debugger, an overloaded host) the wall schedule
+ * skips ahead while simulated time stays regular. */
 static int run_realtime(app_t *a)
 {
-	long long period_ns = 1000000000LL / (long long)a->sim.cfg.tick_hz;
-	struct timespec next, now;
-	clock_gettime(CLOCK_MONOTONIC, &next);
+	rt_clock_t clk;
+	rt_clock_start(&clk, 1000000u / a->sim.cfg.tick_hz);
 
 	while (!stop_requested && !a->write_failed) {
-		if (a->pty_on) {
-			link_poll(&a->link, (uint32_t)(a->sim.now_us / 1000u));
-		} else {
+		if (!a->pty_on) {
 			struct pollfd pfd = {.fd = STDIN_FILENO, .events = POLLIN};
 			if (!a->eof && poll(&pfd, 1, 0) > 0 && !read_input(a))
 				return 1;
@@ -239,23 +229,54 @@ static int run_realtime(app_t *a)
 				break;
 		}
 		sim_tick(&a->sim);
-		if (a->can_on)
-			sim_can_poll(&a->can);
-
-		ts_add_ns(&next, period_ns);
-		clock_gettime(CLOCK_MONOTONIC, &now);
-		/* Far behind (stopped in a debugger, host overloaded): skip ahead
-		 * rather than burst through the missed ticks. Simulated time
-		 * stays regular either way. */
-		struct timespec late = next;
-		ts_add_ns(&late, 100000000LL);
-		if (ts_before(&late, &now))
-			next = now;
-		while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, NULL) == EINTR)
-			if (stop_requested)
-				break;
+		server_poll(&a->sim.srv, (uint32_t)a->sim.now_us);
+		rt_clock_wait(&clk, NULL);
 	}
 	return 0;
+}
+
+/* --can: the CAN command link on a SocketCAN interface. Returns 0 or -1
+ * with a message in err. */
+static int open_can(app_t *a, const char *iface, unsigned long node, unsigned long hz, char *err,
+		    size_t cap)
+{
+	a->can.fd = -1;
+	if (node < CANLINK_NODE_MIN || node > CANLINK_NODE_MAX) {
+		snprintf(err, cap, "--node: %d..%d", CANLINK_NODE_MIN, CANLINK_NODE_MAX);
+		return -1;
+	}
+	if (hz > CANLINK_STATUS_HZ_MAX) {
+		snprintf(err, cap, "--status-hz: 0..%d", CANLINK_STATUS_HZ_MAX);
+		return -1;
+	}
+	/* Only the request identifier reaches the unit; the kernel filters. */
+	uint32_t id = CANLINK_ID_REQUEST + (uint32_t)node;
+	if (sockcan_open(&a->can, iface, &id, 1) < 0) {
+		snprintf(err, cap, "CAN interface %s: %s", iface, strerror(errno));
+		return -1;
+	}
+	canlink_config_t cc = {.node = (uint8_t)node, .status_hz = (uint16_t)hz};
+	vs_can_port_t port = sockcan_port(&a->can);
+	if (server_attach_can(&a->sim.srv, &a->canlink, &port, &cc) < 0) {
+		snprintf(err, cap, "CAN link configuration rejected");
+		return -1;
+	}
+	a->can_on = true;
+	return 0;
+}
+
+/* One line of counters at exit, for the operator and the guest tests. */
+static void close_can(app_t *a)
+{
+	char c[512];
+	size_t n;
+
+	server_can_counters(&a->sim.srv, c, sizeof(c));
+	n = strlen(c);
+	c[n++] = ' ';
+	sockcan_counters(&a->can, c + n, sizeof(c) - n);
+	rt_log(LOG_INFO, "CAN counters: %s", c);
+	sockcan_close(&a->can);
 }
 
 static void usage(FILE *f)
@@ -300,7 +321,7 @@ int main(int argc, char **argv)
 	unsigned long can_node = CANLINK_NODE_DEFAULT, can_hz = CANLINK_STATUS_HZ_DEFAULT;
 
 	bool pty = false;
-	unsigned long baud = VC_DEFAULT_BAUD;
+	unsigned long baud = VS_LINK_DEFAULT_BAUD;
 
 	enum {
 		O_CONFIG = 1,
@@ -431,6 +452,7 @@ int main(int argc, char **argv)
 
 	app_t *a = &app;
 	const char *bad = NULL;
+	rt_log_open("vehicle-sim", false);
 	if (sim_init_ex(&a->sim, &cfg, &pp, &bad) < 0) {
 		fprintf(stderr, "vehicle-sim: configuration rejected: %s\n", bad ? bad : "?");
 		return 1;
@@ -440,12 +462,10 @@ int main(int argc, char **argv)
 		sim_set_realtime(&a->sim, true);
 
 	if (can_iface) {
-		if (sim_can_open(&a->can, &a->sim, can_iface, (unsigned)can_node, (unsigned)can_hz,
-				 err, sizeof(err)) < 0) {
+		if (open_can(a, can_iface, can_node, can_hz, err, sizeof(err)) < 0) {
 			fprintf(stderr, "vehicle-sim: %s\n", err);
 			return 1;
 		}
-		a->can_on = true;
 		fprintf(stderr, "vehicle-sim: CAN link on %s, node %lu, status %lu Hz\n", can_iface,
 			can_node, can_hz);
 	}
@@ -458,7 +478,7 @@ int main(int argc, char **argv)
 			fprintf(stderr, "vehicle-sim: --pty: %s\n", strerror(errno));
 			return 1;
 		}
-		link_init(&a->link, &a->sim.console, &io);
+		server_attach_serial(&a->sim.srv, &io);
 		a->pty_on = true;
 		printf("%s\n", path);
 		fflush(stdout);
@@ -492,7 +512,7 @@ int main(int argc, char **argv)
 
 	int rc = realtime ? run_realtime(a) : pty ? run_pty_fast(a) : run_fast(a);
 	if (a->can_on)
-		sim_can_close(&a->can);
+		close_can(a);
 
 	if (trace_path && trace_close(&trace) < 0) {
 		fprintf(stderr, "vehicle-sim: %s: write failed\n", trace_path);

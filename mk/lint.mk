@@ -9,6 +9,7 @@
 #   clang-format every tracked C file follows .clang-format (`make format` fixes)
 #   client      vehiclectl links no firmware object (nm): the client library
 #               uses the command table and the encodings, never the unit
+#   includes    the folder rules of docs/architecture.md (tools/lint/includes.py)
 # tests/ are excluded from the analysers (cmocka macros); they build with
 # -Wall -Wextra -Werror.
 # Also in the set: hal/linux/ (the vehicle-fw backends, mk/linux.mk), its
@@ -16,13 +17,20 @@
 # hal/cortexm/ (it needs the ARM target) and tools/bench/, tools/ref/.
 
 LINT_SRC := $(FW_SRC) $(PROTO_SRC) $(HOST_SRC) $(SIM_SRC) $(wildcard host_sim/*_main.c) \
-	$(wildcard hal/linux/*.c hal/linux/sim/*.c tools/*.c)
+	$(wildcard hal/linux/*.c host_sim/devices/*.c tools/*.c)
 LINT_DEFS := -std=c11 -I. -D_GNU_SOURCE -I/usr/include/libevdev-1.0
 CLANG ?= clang
 
-.PHONY: lint lint-cppcheck lint-tidy lint-warnings lint-format lint-client
+.PHONY: lint lint-cppcheck lint-tidy lint-warnings lint-format lint-client lint-includes
 
-lint: lint-format lint-cppcheck lint-warnings lint-tidy lint-client
+lint: lint-format lint-includes lint-cppcheck lint-warnings lint-tidy lint-client
+
+# What may include what (docs/architecture.md); the self-test first proves
+# that each rule catches its violation.
+lint-includes:
+	@echo "  INCLUDES folder rules"
+	$(Q)python3 tools/lint/includes.py --self-test
+	$(Q)python3 tools/lint/includes.py .
 
 # Every global symbol firmware/ defines, looked for in vehiclectl.
 lint-client: $(BUILD)/vehiclectl $(FW_LIB)

@@ -6,25 +6,22 @@
 # hal/linux/ goes into its own library, linked only into vehicle-fw and the
 # tests/test_linux_* programs (the Cortex-M build never sees it).
 
-LINUX_SRC := $(wildcard hal/linux/*.c)
+LINUX_SRC := $(filter-out hal/linux/main.c,$(wildcard hal/linux/*.c))
 LINUX_LIB := $(BUILD)/liblinux.a
 LINUX_LDLIBS := -lgpiod -lmodbus -levdev -lpthread
 # libevdev's headers live in their own folder (arch-independent, so the
 # native path serves the cross build too).
 LINUX_CFLAGS := -I/usr/include/libevdev-1.0
 
-$(call objs,$(LINUX_SRC)) $(BUILD)/obj/tests/test_linux_fw.o: EXTRA_CFLAGS += $(LINUX_CFLAGS)
+$(call objs,$(LINUX_SRC) hal/linux/main.c) $(BUILD)/obj/tests/test_linux_fw.o: \
+	EXTRA_CFLAGS += $(LINUX_CFLAGS)
 
 $(LINUX_LIB): $(call objs,$(LINUX_SRC))
 
-# The tools pattern names the binary after tools/vehicle_fw_main.c; the
-# installed name has a dash.
-$(BUILD)/vehicle_fw: $(BUILD)/obj/tools/vehicle_fw_main.o $(LINUX_LIB) $(HOST_LIBS)
+# The platform's main (hal/linux/main.c), as the Cortex-M board has its own.
+$(BUILD)/vehicle-fw: $(BUILD)/obj/hal/linux/main.o $(LINUX_LIB) $(HOST_LIBS)
 	@$(if $(Q),echo "  LD      $@")
 	$(Q)$(CC) $(LDFLAGS) -o $@ $^ $(LDLIBS_HOST) $(LINUX_LDLIBS)
-
-$(BUILD)/vehicle-fw: $(BUILD)/vehicle_fw
-	$(Q)cp -f $< $@
 
 $(BUILD)/tests/test_linux_%: $(BUILD)/obj/tests/test_linux_%.o $(TEST_SUPPORT_LIB) $(LINUX_LIB) \
 		$(HOST_LIBS)
@@ -63,22 +60,22 @@ install: $(BUILD)/vehicle-fw $(BUILD)/vehiclectl
 	[ -e $(DESTDIR)$(SYSCONFDIR)/vehicle/io.xml ] || \
 		install -m 644 config/io.xml $(DESTDIR)$(SYSCONFDIR)/vehicle/io.xml
 
-# Modbus RTU drive simulator for the tests (hal/linux/sim/).
-$(BUILD)/mbdrive-sim: $(BUILD)/obj/hal/linux/sim/mbdrive_sim_main.o
+# Modbus RTU drive simulator for the tests (host_sim/devices/).
+$(BUILD)/mbdrive-sim: $(BUILD)/obj/host_sim/devices/mbdrive_sim_main.o
 	@$(if $(Q),echo "  LD      $@")
 	$(Q)$(CC) $(LDFLAGS) -o $@ $^ -lmodbus
 
 all: $(BUILD)/mbdrive-sim
 
-# Virtual uinput joystick for the QEMU guest tests (hal/linux/sim/).
-$(BUILD)/ujoy: $(BUILD)/obj/hal/linux/sim/ujoy_main.o
+# Virtual uinput joystick for the QEMU guest tests (host_sim/devices/).
+$(BUILD)/ujoy: $(BUILD)/obj/host_sim/devices/ujoy_main.o
 	@$(if $(Q),echo "  LD      $@")
 	$(Q)$(CC) $(LDFLAGS) -o $@ $^
 
 all: $(BUILD)/ujoy
 
-# CiA 402 drive simulator on SocketCAN for the QEMU guest tests (hal/linux/sim/).
-$(BUILD)/cia402-sim: $(BUILD)/obj/hal/linux/sim/cia402sim_main.o
+# CiA 402 drive simulator on SocketCAN for the QEMU guest tests (host_sim/devices/).
+$(BUILD)/cia402-sim: $(BUILD)/obj/host_sim/devices/cia402sim_main.o
 	@$(if $(Q),echo "  LD      $@")
 	$(Q)$(CC) $(LDFLAGS) -o $@ $^
 

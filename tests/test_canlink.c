@@ -22,8 +22,8 @@
 
 #include "../host_sim/sim.h"
 #include "../proto/canlink.h"
-#include "../proto/client.h"
-#include "../proto/client_can.h"
+#include "../proto/client/client.h"
+#include "../proto/client/client_can.h"
 #include "../proto/console.h"
 
 #define QN 8192

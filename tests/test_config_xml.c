@@ -9,7 +9,7 @@
 
 #include <cmocka.h>
 
-#include "hal/config_xml.h"
+#include "hal/posix/config_xml.h"
 
 /* Every non-io field equal. */
 static void assert_same_settings(const vs_config_t *a, const vs_config_t *b)

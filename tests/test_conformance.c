@@ -542,7 +542,7 @@ static void test_serial_stream(void **state)
 
 	(void)state;
 	sim_set_output(&S, collect, NULL);
-	console_feed(&S.console, (const uint8_t *)script, sizeof(script) - 1);
+	console_feed(&S.srv.con, (const uint8_t *)script, sizeof(script) - 1);
 	assert_string_equal(out, "ok true\n"
 				 "ok true\n"
 				 "ok true\n"

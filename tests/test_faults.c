@@ -796,11 +796,11 @@ static void test_command_flood(void **state)
 	/* a line flood on the byte stream: every line answered, nothing queued */
 	{
 		static const char line[] = "moveLinearAbs 9999 0 0\r\n";
-		unsigned before = S.console.lines;
+		unsigned before = S.srv.con.lines;
 
 		for (int i = 0; i < 500; i++)
-			console_feed(&S.console, (const uint8_t *)line, sizeof(line) - 1);
-		assert_int_equal(S.console.lines - before, 500);
+			console_feed(&S.srv.con, (const uint8_t *)line, sizeof(line) - 1);
+		assert_int_equal(S.srv.con.lines - before, 500);
 		assert_int_equal(motion_queue_len(&S.vehicle.motion), 32);
 	}
 	/* 32 stops of 20 mm: each well under a second */

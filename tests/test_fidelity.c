@@ -22,7 +22,7 @@
 
 #include <cmocka.h>
 
-#include "hal/config_xml.h"
+#include "hal/posix/config_xml.h"
 #include "tools/bench/plantmetrics.h"
 
 static void load(const char *path, vs_config_t *cfg)

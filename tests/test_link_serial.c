@@ -30,7 +30,8 @@
 #include <unistd.h>
 
 #include "../host_sim/sim.h"
-#include "../proto/client.h"
+#include "../hal/posix/tty.h"
+#include "../proto/client/client.h"
 #include "../proto/link.h"
 
 static sim_t S;
@@ -94,10 +95,10 @@ static int setup(void **state)
 		return -1;
 	if (openpty(&MASTER, &SLAVE, NULL, NULL, NULL) != 0)
 		return -1;
-	if (vc_tty_set_raw(SLAVE, 115200) != 0 || vc_tty_set_raw(MASTER, 0) != 0)
+	if (tty_set_raw(SLAVE, 115200) != 0 || tty_set_raw(MASTER, 0) != 0)
 		return -1;
 	fcntl(MASTER, F_SETFL, fcntl(MASTER, F_GETFL) | O_NONBLOCK);
-	link_init(&L, &S.console, &io);
+	link_init(&L, &S.srv.con, &io);
 	RUN = 1;
 	return pthread_create(&TH, NULL, unit_thread, NULL) == 0 ? 0 : -1;
 }
@@ -522,7 +523,7 @@ static void test_client_timeout(void **state)
 		int m, s;
 
 		assert_int_equal(openpty(&m, &s, NULL, NULL, NULL), 0);
-		assert_int_equal(vc_tty_set_raw(s, 115200), 0);
+		assert_int_equal(tty_set_raw(s, 115200), 0);
 		assert_int_equal(vc_attach_serial_fd(&C, s, true), VC_OK);
 		C.timeout_ms = 50;
 		C.retries = 2;

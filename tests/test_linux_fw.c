@@ -19,11 +19,11 @@
 
 #include "fw_rig.h"
 
-#include "../hal/config_xml.h"
+#include "../hal/posix/config_xml.h"
 #include "../hal/linux/backend_cfg.h"
 #include "../hal/linux/joystick.h"
 #include <linux/input.h>
-#include "../proto/client.h"
+#include "../proto/client/client.h"
 
 #define VEHICLE_HEAD                                                                               \
 	"<vehicle kinematics=\"differential\" tick_hz=\"100\">\n"                                  \

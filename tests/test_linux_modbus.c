@@ -432,7 +432,7 @@ static void test_pymodbus_crosscheck(void **state)
 	sim_ctl("battery 71850");
 	fw_sleep_ms(50);
 	snprintf(cmd, sizeof(cmd),
-		 "/usr/bin/python3 hal/linux/sim/mb_crosscheck.py %s %d 1 71850 2>&1", BUS_B,
+		 "/usr/bin/python3 host_sim/devices/mb_crosscheck.py %s %d 1 71850 2>&1", BUS_B,
 		 (int)SIM);
 	FILE *p = popen(cmd, "r");
 	assert_non_null(p);

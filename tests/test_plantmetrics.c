@@ -12,7 +12,7 @@
 
 #include <cmocka.h>
 
-#include "hal/config_xml.h"
+#include "hal/posix/config_xml.h"
 #include "tools/bench/plantmetrics.h"
 
 #define assert_near(a, b)                                                                          \

@@ -11,7 +11,7 @@
 
 #include <cmocka.h>
 
-#include "hal/config_xml.h"
+#include "hal/posix/config_xml.h"
 #include "host_sim/sim.h"
 
 static sim_t sim;

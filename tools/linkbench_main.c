@@ -14,7 +14,8 @@
 #include <unistd.h>
 
 #include "../host_sim/sim.h"
-#include "../proto/client.h"
+#include "../hal/posix/tty.h"
+#include "../proto/client/client.h"
 #include "../proto/link.h"
 
 static sim_t S;
@@ -81,10 +82,10 @@ int main(void)
 		free(c);
 		return 1;
 	}
-	vc_tty_set_raw(s, 115200);
-	vc_tty_set_raw(M, 0);
+	tty_set_raw(s, 115200);
+	tty_set_raw(M, 0);
 	fcntl(M, F_SETFL, fcntl(M, F_GETFL) | O_NONBLOCK);
-	link_init(&L, &S.console, &io);
+	link_init(&L, &S.srv.con, &io);
 	pthread_create(&th, NULL, unit, NULL);
 	vc_attach_serial_fd(c, s, true);
 	vc_getPosition(c, NULL, &pos); /* first call also does the info handshake */

@@ -18,7 +18,7 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "../proto/client.h"
+#include "../proto/client/client.h"
 #include "../proto/cmdtab.h"
 #include "../proto/numparse.h"
 

@@ -10,15 +10,13 @@
 #include "board.h"
 #include "firmware/vehicle.h"
 #include "loop_hal.h"
-#include "proto/console.h"
-#include "proto/link.h"
+#include "proto/server.h"
 
 enum { PLAN_BUDGET = 2 };
 
 static loop_hal_t plant;
 static vehicle_t unit;
-static console_t con;
-static link_t lnk;
+static vs_server_t srv; /* the console and the binary frames on the UART */
 
 /* What the tick and the requests cost, in processor cycles (systick_cycles):
  * read from outside, through a debugger or QEMU's monitor (tests/mcu,
@@ -72,11 +70,11 @@ static uint32_t serve_link(uint32_t done, uint32_t now_ms, uint32_t seen, uint32
 	while (r == seen && systick_count() == done && uart_tx_pending() == 0 &&
 	       uart_link.read(NULL, &b, 1) == 1) {
 		uint32_t t0 = systick_cycles();
-		link_feed(&lnk, &b, 1, now_ms);
-		r = con.lines + lnk.fs.rx.st.frames;
+		link_feed(&srv.serial, &b, 1, now_ms);
+		r = srv.con.lines + srv.serial.fs.rx.st.frames;
 		*cost = systick_cycles() - t0;
 	}
-	frame_srv_poll(&lnk.fs, now_ms); /* the frame inter-byte timeout */
+	frame_srv_poll(&srv.serial.fs, now_ms); /* the frame inter-byte timeout */
 	return r;
 }
 
@@ -84,8 +82,8 @@ int main(void)
 {
 	uint32_t tick_hz = unit_init();
 	uart_init();
-	console_init(&con, &unit, NULL, NULL);
-	link_init(&lnk, &con, &uart_link);
+	server_init(&srv, &unit, NULL, NULL, NULL, NULL);
+	server_attach_serial(&srv, &uart_link);
 	systick_init(tick_hz);
 
 	uint32_t done = systick_count();

@@ -69,7 +69,7 @@
 #include <stdint.h>
 
 #include "../../firmware/config.h"
-#include "../config_xml.h"
+#include "../posix/config_xml.h"
 
 enum { BK_DRIVE_LOOPBACK = 0, BK_DRIVE_MODBUS = 1, BK_DRIVE_CIA402 = 2 };
 #define BK_MODBUS_BUSES	 2

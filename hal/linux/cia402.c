@@ -10,7 +10,7 @@
 #include <string.h>
 #include <time.h>
 
-#include "rt.h"
+#include "../posix/rt.h"
 
 /* ==== protocol (pure) ==================================================== */
 

@@ -64,7 +64,7 @@
 #include <stdint.h>
 
 #include "../hal.h"
-#include "../socketcan.h"
+#include "../posix/socketcan.h"
 #include "backend_cfg.h"
 
 /* ---- protocol ----------------------------------------------------------- */

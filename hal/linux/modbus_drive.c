@@ -7,7 +7,7 @@
 #include <string.h>
 #include <time.h>
 
-#include "rt.h"
+#include "../posix/rt.h"
 
 #define CYCLE_PAUSE_NS 1000000L /* between cycles: leaves the line idle briefly */
 #define BLOCK_MAX      8

@@ -14,7 +14,7 @@
 #include <sys/mman.h>
 #include <unistd.h>
 
-#include "../../hal/config_xml.h"
+#include "../../hal/posix/config_xml.h"
 #include "../../host_sim/sim.h"
 
 /* An in-memory file the loader can open by name. */

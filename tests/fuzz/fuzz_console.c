@@ -72,7 +72,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	vs_config_defaults(&cfg);
 	if (sim_init(&S, &cfg, NULL) != 0)
 		abort();
-	console_set_extra(&S.console, extra, &S);
+	console_set_extra(&S.srv.con, extra, &S);
 	sim_set_output(&S, on_write, NULL);
 
 	/* One line at a time (with its terminator), so that each reply can be
@@ -86,7 +86,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 		unsigned r0 = out.replies;
 		before = S.vehicle;
 		mbefore = S.vehicle.motion;
-		console_feed(&S.console, data + start, n);
+		console_feed(&S.srv.con, data + start, n);
 		if (out.replies > r0 + 1)
 			abort(); /* more than one reply for one line */
 		if (out.replies == r0 + 1) {
@@ -101,6 +101,6 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 		start += n;
 	}
 	/* The tail without a line end: its reply comes at the next line end. */
-	console_feed(&S.console, (const uint8_t *)"\n", 1);
+	console_feed(&S.srv.con, (const uint8_t *)"\n", 1);
 	return 0;
 }

@@ -42,9 +42,9 @@ process_files() {
 		echo "$build/$f=/g/build/$f"
 	done
 	echo "$(command -v socat)=/usr/bin/socat"
-	echo "$top/hal/linux/sim/mb_crosscheck.py=/g/hal/linux/sim/mb_crosscheck.py"
+	echo "$top/host_sim/devices/mb_crosscheck.py=/g/host_sim/devices/mb_crosscheck.py"
 	echo "$(readlink -f $py)=/usr/bin/python3"
-	"$py" "$top/hal/linux/sim/mb_crosscheck.py" --list-modules | while IFS= read -r f; do
+	"$py" "$top/host_sim/devices/mb_crosscheck.py" --list-modules | while IFS= read -r f; do
 		case $f in "$top"/*) continue ;; esac
 		echo "$f=$f"
 	done

@@ -9,7 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 
-#include "hal/config_xml.h"
+#include "hal/posix/config_xml.h"
 #include "tools/bench/plantmetrics.h"
 
 static void print_row(const char *name, const char *plant, const pm_result_t *r)

@@ -1,6 +1,6 @@
 // vehicle-corba: serves VehicleService over CORBA (omniORB) from the IDL of
 // the specification's appendix, and forwards every call to a unit through the
-// C client library (proto/client.h) over a serial port (binary frames or the
+// C client library (proto/client/client.h) over a serial port (binary frames or the
 // text console) or CAN. docs/corba.md has the options and the exception map.
 //
 //   vehicle-corba --port /dev/ttyUSB0 [--name VehicleService] [--ior]
@@ -21,7 +21,7 @@
 #include "VehicleService.hh"
 
 extern "C" {
-#include "proto/client.h"
+#include "proto/client/client.h"
 }
 
 namespace

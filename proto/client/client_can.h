@@ -8,7 +8,7 @@
 
 #include <stdbool.h>
 
-#include "canlink.h"
+#include "../canlink.h"
 #include "client.h"
 
 typedef struct {

@@ -17,8 +17,9 @@
 
 #include "client.h"
 #include "client_io.h"
-#include "console.h"
-#include "numparse.h"
+#include "../console.h"
+#include "../numparse.h"
+#include "../../hal/posix/tty.h"
 
 typedef struct {
 	int fd;
@@ -380,7 +381,7 @@ int vc_attach_console_fd(vc_client_t *c, int fd, bool own)
 
 int vc_open_console(vc_client_t *c, const char *dev, unsigned baud)
 {
-	int fd = vc_tty_open(dev, baud);
+	int fd = tty_open(dev, baud);
 
 	if (fd < 0)
 		return VC_E_LINK;

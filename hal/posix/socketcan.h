@@ -9,16 +9,18 @@
 #ifndef HAL_SOCKETCAN_H
 #define HAL_SOCKETCAN_H
 
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 
-#include "link.h"
+#include "../link.h"
 
 typedef struct {
 	int fd;
 	uint32_t tx_frames, tx_full, tx_errors;
 	uint32_t rx_frames, rx_dropped, rx_errors;
 	uint32_t rx_overflow; /* dropped by the kernel: receive buffer full (cumulative) */
+	bool reported;	      /* a send or receive error was logged (once) */
 } sockcan_t;
 
 /* Opens and binds a raw CAN socket on ifname. When ids is not NULL the
@@ -33,5 +35,11 @@ int sockcan_recv(sockcan_t *s, canlink_frame_t *f);
  * 0 timeout, -1 error. */
 int sockcan_wait(sockcan_t *s, int timeout_ms);
 void sockcan_close(sockcan_t *s);
+
+/* s as the command server's CAN port (hal/link.h). The first send or
+ * receive error is logged (rt_log), the rest only counted; serving goes on. */
+vs_can_port_t sockcan_port(sockcan_t *s);
+/* The socket's counters as one "sock_tx_full N ..." line (no newline). */
+void sockcan_counters(const sockcan_t *s, char *buf, size_t cap);
 
 #endif

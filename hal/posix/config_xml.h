@@ -53,7 +53,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "../firmware/config.h"
+#include "../../firmware/config.h"
 
 #define HAL_IO_CHIP_MAX 32
 

@@ -28,8 +28,9 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "cmdtab.h"
-#include "wire.h"
+#include "../../hal/link.h"
+#include "../cmdtab.h"
+#include "../wire.h"
 
 /* Client status codes. */
 enum {
@@ -49,7 +50,7 @@ const char *vc_strerror(int err);
 
 #define VC_DEFAULT_TIMEOUT_MS 500
 #define VC_DEFAULT_RETRIES    2
-#define VC_DEFAULT_BAUD	      115200
+#define VC_DEFAULT_BAUD	      VS_LINK_DEFAULT_BAUD
 
 typedef struct {
 	/* Sends one request and waits for its response, retrying on timeout
@@ -95,12 +96,8 @@ int vc_open_serial(vc_client_t *c, const char *dev, unsigned baud);
 int vc_attach_serial_fd(vc_client_t *c, int fd, bool own);
 int vc_open_console(vc_client_t *c, const char *dev, unsigned baud);
 int vc_attach_console_fd(vc_client_t *c, int fd, bool own);
-/* CAN (proto/client_can.c): SocketCAN interface, unit node id. */
+/* CAN (proto/client/client_can.c): SocketCAN interface, unit node id. */
 int vc_open_can(vc_client_t *c, const char *iface, unsigned node);
-
-/* Opens a tty raw 8N1 at baud (0: keep), non-blocking; -1 with errno. */
-int vc_tty_open(const char *dev, unsigned baud);
-int vc_tty_set_raw(int fd, unsigned baud);
 
 /* Generic call: any table row, in[]/out[] as cmd_invoke's. out strings and
  * alarm sequences point into c->store. */

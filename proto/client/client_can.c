@@ -7,7 +7,7 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "../hal/socketcan.h"
+#include "../../hal/posix/socketcan.h"
 
 typedef struct {
 	vc_client_t *c;

@@ -1,9 +1,9 @@
 /* vehicle-fw: the firmware on the vehicle's Linux computer (docs/linux.md).
  *
- * One thread: every period it reads the clock, advances the backends,
- * runs vehicle_tick() and serves the command link (console and binary
- * frames, proto/link.h) on a serial port, then sleeps to the next absolute
- * deadline with clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME).
+ * One thread: every period it reads the inputs (the backends), runs
+ * vehicle_tick() and polls the command server (proto/server.h: console and
+ * binary frames on a serial port, the CAN command link with --can), then
+ * sleeps to the next absolute deadline (hal/posix/rt.h).
  *
  * SIGTERM/SIGINT: the link is no longer served, the unit is stopped with
  * its normal deceleration (bounded), then servo off and power off; exit 0.
@@ -19,20 +19,19 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "../hal/config_xml.h"
-#include "../hal/linux/backend_cfg.h"
-#include "../hal/linux/lhal.h"
-#include "../hal/linux/rt.h"
-#include "../proto/client.h"
-#include "../proto/link.h"
-#include "../proto/numparse.h"
+#include "../posix/config_xml.h"
+#include "backend_cfg.h"
+#include "lhal.h"
+#include "../posix/rt.h"
+#include "../posix/tty.h"
+#include "../../proto/numparse.h"
+#include "../../proto/server.h"
+#include "../posix/socketcan.h"
 
 #define DEFAULT_CONFIG	"/etc/vehicle/vehicle.xml"
 #define DEFAULT_RT_PRIO 80
 /* Longest deceleration the shutdown waits for before cutting power. */
 #define SHUTDOWN_BOUND_MS 10000u
-/* Far behind (host stalled): restart the schedule instead of bursting. */
-#define SKIP_AFTER_NS 100000000LL
 
 static volatile sig_atomic_t stop_requested;
 
@@ -46,14 +45,14 @@ typedef struct {
 	vehicle_t v;
 	lhal_t hal;
 	vs_hal_t vh;
-	console_t con;
-	link_t link;
+	vs_server_t srv;
+	sockcan_t can; /* --can: the CAN command link's socket and state */
+	canlink_t canlink;
 	int in_fd, out_fd;
 	uint32_t write_errors;
 	rt_status_t rt;
 	rt_stats_t st;
-	struct timespec t0;
-	uint32_t period_us;
+	rt_clock_t clk;
 } app_t;
 
 static app_t app;
@@ -74,11 +73,6 @@ static size_t port_write(void *ctx, const uint8_t *buf, size_t len)
 	return r > 0 ? (size_t)r : 0;
 }
 
-static void no_write(void *ctx, const char *s, size_t n)
-{
-	(void)ctx, (void)s, (void)n; /* replaced by link_init */
-}
-
 /* "$rt": the loop's own timing, beside the firmware's "$diag". */
 static bool rt_extra(void *ctx, int argc, char **argv, char *reply, size_t cap)
 {
@@ -94,7 +88,7 @@ static bool rt_extra(void *ctx, int argc, char **argv, char *reply, size_t cap)
 		 "ok period_us %u ticks %llu late %llu max_late_us %u busy_max_us %u skipped %llu "
 		 "sched %s "
 		 "prio %d mlock %s gpio_errors %u joystick %s battery_errors %u",
-		 a->period_us, (unsigned long long)a->st.ticks, (unsigned long long)a->st.late,
+		 a->clk.period_us, (unsigned long long)a->st.ticks, (unsigned long long)a->st.late,
 		 a->st.max_late_us, a->st.busy_max_us, (unsigned long long)a->st.skipped,
 		 a->rt.fifo ? "fifo" : "other", a->rt.priority, a->rt.locked ? "yes" : "no",
 		 a->hal.gpio.errors,
@@ -113,13 +107,6 @@ static bool rt_extra(void *ctx, int argc, char **argv, char *reply, size_t cap)
 	return true;
 }
 
-static uint32_t now_us(const app_t *a)
-{
-	struct timespec t;
-	clock_gettime(CLOCK_MONOTONIC, &t);
-	return (uint32_t)((unsigned long long)ts_diff_ns(&t, &a->t0) / 1000ull);
-}
-
 /* This thread's CPU time: what our own work costs, without the time the
  * host gave to other tasks (a preempted tick is late, not over budget). */
 static uint64_t cpu_ns(void)
@@ -129,14 +116,14 @@ static uint64_t cpu_ns(void)
 	return (uint64_t)t.tv_sec * 1000000000ull + (uint64_t)t.tv_nsec;
 }
 
-static void tick(app_t *a, bool serve_link)
+static void tick(app_t *a, bool serve)
 {
 	uint64_t c0 = cpu_ns();
-	uint32_t us = now_us(a);
+	uint32_t us = rt_clock_now_us(&a->clk);
 	lhal_pre_tick(&a->hal, us);
 	vehicle_tick(&a->v, us);
-	if (serve_link)
-		link_poll(&a->link, us / 1000u);
+	if (serve)
+		server_poll(&a->srv, us);
 	a->st.ticks++;
 	uint64_t busy = (cpu_ns() - c0) / 1000u;
 	uint32_t busy_us = busy > UINT32_MAX ? UINT32_MAX : (uint32_t)busy;
@@ -145,46 +132,26 @@ static void tick(app_t *a, bool serve_link)
 	vehicle_tick_busy(&a->v, busy_us);
 }
 
-/* Sleeps to the next deadline, counting late wake-ups. */
-static void wait_next(app_t *a, struct timespec *next)
-{
-	struct timespec now;
-	ts_add_ns(next, (long long)a->period_us * 1000LL);
-	while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, next, NULL) == EINTR)
-		;
-	clock_gettime(CLOCK_MONOTONIC, &now);
-	long long late = ts_diff_ns(&now, next);
-	if (late > (long long)a->period_us * 500LL)
-		a->st.late++;
-	if (late > 0 && (unsigned long long)late / 1000ull > a->st.max_late_us)
-		a->st.max_late_us = (uint32_t)((unsigned long long)late / 1000ull);
-	if (late > SKIP_AFTER_NS) {
-		a->st.skipped +=
-		    (unsigned long long)late / ((unsigned long long)a->period_us * 1000ull);
-		*next = now;
-	}
-}
-
 static bool unit_moving(app_t *a)
 {
 	return motion_has_work(&a->v.motion) || motion_is_moving(&a->v.motion);
 }
 
-static void shutdown_unit(app_t *a, struct timespec *next)
+static void shutdown_unit(app_t *a)
 {
-	uint32_t ticks = 0, bound = SHUTDOWN_BOUND_MS * 1000u / a->period_us;
+	uint32_t ticks = 0, bound = SHUTDOWN_BOUND_MS * 1000u / a->clk.period_us;
 	bool was_moving = unit_moving(a);
 
 	vs_stop(&a->v);
 	while (unit_moving(a) && ticks++ < bound) {
 		tick(a, false);
-		wait_next(a, next);
+		rt_clock_wait(&a->clk, &a->st);
 	}
 	if (unit_moving(a))
 		rt_log(LOG_ERR, "shutdown: unit still moving after %u ms; cutting power",
 		       SHUTDOWN_BOUND_MS);
 	else if (was_moving)
-		rt_log(LOG_INFO, "shutdown: stopped after %u ms", ticks * a->period_us / 1000u);
+		rt_log(LOG_INFO, "shutdown: stopped after %u ms", ticks * a->clk.period_us / 1000u);
 	if (a->v.powered)
 		vs_setServo(&a->v, false);
 	vs_setPower(&a->v, false);
@@ -203,14 +170,25 @@ static void usage(FILE *f)
 	      "  --config FILE   vehicle description with its <backends> section\n"
 	      "                  (default " DEFAULT_CONFIG ")\n"
 	      "  --io FILE       io.xml (default: io.xml beside the configuration)\n"
-	      "  --port DEV      serve the command link on this serial port\n"
+	      "  --port DEV      serve the serial command link on this port\n"
 	      "                  (default: stdin/stdout)\n"
 	      "  --baud N        line speed of --port (default 115200)\n"
+	      "  --can IFACE     also serve the CAN command link on SocketCAN interface\n"
+	      "                  IFACE (docs/can.md)\n"
+	      "  --node N        CAN node id, 1..127 (default 1)\n"
+	      "  --status-hz N   CAN status frame rate, 0 (off)..1000 (default 10)\n"
 	      "  --log stderr|syslog  where messages go (default stderr)\n"
 	      "  --rt-priority N SCHED_FIFO priority 1..99, 0 for none (default 80)\n"
 	      "  --help          this text\n",
 	      f);
 }
+
+typedef struct {
+	const char *config_path, *io_path, *port, *can_iface;
+	unsigned long baud, prio, can_node, can_hz;
+	bool use_syslog;
+	char io_buf[1024];
+} opts_t;
 
 static int parse_ulong(const char *s, unsigned long max, unsigned long *out)
 {
@@ -223,14 +201,21 @@ static int parse_ulong(const char *s, unsigned long max, unsigned long *out)
 	return 0;
 }
 
-int main(int argc, char **argv)
+/* One option with a number: its value, or a message and exit status 2. */
+static int number_opt(const char *name, const char *arg, unsigned long lo, unsigned long hi,
+		      unsigned long *out)
 {
-	const char *config_path = DEFAULT_CONFIG, *io_path = NULL, *port = NULL;
-	unsigned long baud = VC_DEFAULT_BAUD, prio = DEFAULT_RT_PRIO;
-	bool use_syslog = false;
-	char io_buf[1024], err[512];
+	if (parse_ulong(arg, hi, out) < 0 || *out < lo) {
+		fprintf(stderr, "vehicle-fw: --%s: %lu..%lu\n", name, lo, hi);
+		return 2;
+	}
+	return 0;
+}
 
-	enum { O_CONFIG = 1, O_IO, O_PORT, O_BAUD, O_LOG, O_PRIO, O_HELP };
+/* Returns -1 to go on, else the exit status. */
+static int parse_args(int argc, char **argv, opts_t *o)
+{
+	enum { O_CONFIG = 1, O_IO, O_PORT, O_BAUD, O_LOG, O_PRIO, O_HELP, O_CAN, O_NODE, O_HZ };
 	static const struct option opts[] = {
 	    {"config", required_argument, NULL, O_CONFIG},
 	    {"io", required_argument, NULL, O_IO},
@@ -239,39 +224,44 @@ int main(int argc, char **argv)
 	    {"log", required_argument, NULL, O_LOG},
 	    {"rt-priority", required_argument, NULL, O_PRIO},
 	    {"help", no_argument, NULL, O_HELP},
+	    {"can", required_argument, NULL, O_CAN},
+	    {"node", required_argument, NULL, O_NODE},
+	    {"status-hz", required_argument, NULL, O_HZ},
 	    {NULL, 0, NULL, 0},
 	};
-	int o;
-	while ((o = getopt_long(argc, argv, "", opts, NULL)) != -1) {
-		switch (o) {
+	int c, rc = 0;
+	while (rc == 0 && (c = getopt_long(argc, argv, "", opts, NULL)) != -1) {
+		switch (c) {
 		case O_CONFIG:
-			config_path = optarg;
+			o->config_path = optarg;
 			break;
 		case O_IO:
-			io_path = optarg;
+			o->io_path = optarg;
 			break;
 		case O_PORT:
-			port = optarg;
+			o->port = optarg;
+			break;
+		case O_CAN:
+			o->can_iface = optarg;
 			break;
 		case O_BAUD:
-			if (parse_ulong(optarg, 4000000, &baud) < 0 || baud == 0) {
-				fprintf(stderr,
-					"vehicle-fw: --baud: a line speed such as 115200\n");
-				return 2;
-			}
-			break;
-		case O_LOG:
-			if (!strcmp(optarg, "syslog")) {
-				use_syslog = true;
-			} else if (strcmp(optarg, "stderr") != 0) {
-				fprintf(stderr, "vehicle-fw: --log: stderr or syslog\n");
-				return 2;
-			}
+			rc = number_opt("baud", optarg, 1, 4000000, &o->baud);
 			break;
 		case O_PRIO:
-			if (parse_ulong(optarg, 99, &prio) < 0) {
-				fprintf(stderr, "vehicle-fw: --rt-priority: 0..99\n");
-				return 2;
+			rc = number_opt("rt-priority", optarg, 0, 99, &o->prio);
+			break;
+		case O_NODE:
+			rc = number_opt("node", optarg, CANLINK_NODE_MIN, CANLINK_NODE_MAX,
+					&o->can_node);
+			break;
+		case O_HZ:
+			rc = number_opt("status-hz", optarg, 0, CANLINK_STATUS_HZ_MAX, &o->can_hz);
+			break;
+		case O_LOG:
+			o->use_syslog = !strcmp(optarg, "syslog");
+			if (!o->use_syslog && strcmp(optarg, "stderr") != 0) {
+				fprintf(stderr, "vehicle-fw: --log: stderr or syslog\n");
+				rc = 2;
 			}
 			break;
 		case O_HELP:
@@ -282,34 +272,26 @@ int main(int argc, char **argv)
 			return 2;
 		}
 	}
+	if (rc)
+		return rc;
 	if (optind < argc) {
 		fprintf(stderr, "vehicle-fw: unexpected argument '%s'\n", argv[optind]);
 		return 2;
 	}
-	rt_log_open(use_syslog);
-	if (!config_path) /* getopt gives every -c an argument; the analyser cannot know */
-		config_path = DEFAULT_CONFIG;
-	if (!io_path) {
-		const char *slash = strrchr(config_path, '/');
-		int dir = slash ? (int)(slash - config_path + 1) : 0;
-		snprintf(io_buf, sizeof(io_buf), "%.*sio.xml", dir, config_path);
-		io_path = io_buf;
+	if (!o->config_path) /* getopt gives every option an argument; the analyser cannot know */
+		o->config_path = DEFAULT_CONFIG;
+	if (!o->io_path) {
+		const char *slash = strrchr(o->config_path, '/');
+		int dir = slash ? (int)(slash - o->config_path + 1) : 0;
+		snprintf(o->io_buf, sizeof(o->io_buf), "%.*sio.xml", dir, o->config_path);
+		o->io_path = o->io_buf;
 	}
+	return -1;
+}
 
-	app_t *a = &app;
-	vs_config_t cfg;
-	hal_io_map_t io_map;
-	backend_cfg_t bk;
-	if (config_load(config_path, io_path, &cfg, &io_map, err, sizeof(err)) < 0 ||
-	    backend_cfg_load(config_path, &bk, err, sizeof(err)) < 0) {
-		rt_log(LOG_ERR, "%s", err);
-		return 1;
-	}
-	uint8_t naxes = vs_config_axes(&cfg);
-	if (lhal_open(&a->hal, &bk, &io_map, naxes, err, sizeof(err)) < 0) {
-		rt_log(LOG_ERR, "%s", err);
-		return 1;
-	}
+/* Warnings about a configuration that loads but will not do what it says. */
+static void check_config(const app_t *a, const vs_config_t *cfg, const backend_cfg_t *bk)
+{
 	static const struct {
 		unsigned fn;
 		size_t off;
@@ -319,43 +301,66 @@ int main(int argc, char **argv)
 	    {BK_LINE_ESTOP, offsetof(vs_config_t, has_estop)},
 	};
 	for (size_t i = 0; i < sizeof(needs) / sizeof(needs[0]); i++)
-		if (*(const bool *)((const char *)&cfg + needs[i].off) &&
+		if (*(const bool *)((const char *)cfg + needs[i].off) &&
 		    !lgpio_has_fn(&a->hal.gpio, needs[i].fn))
 			rt_log(LOG_WARNING,
 			       "%s is configured in <devices> but has no <line>: reads "
 			       "inactive",
 			       backend_line_name(needs[i].fn));
 
-	if (bk.joystick.used)
+	if (bk->joystick.used)
 		rt_log(a->hal.joy.present ? LOG_INFO : LOG_WARNING, "joystick %s: %s",
-		       bk.joystick.device,
+		       bk->joystick.device,
 		       a->hal.joy.present ? "open" : "not present (looked for once a second)");
 	for (unsigned n = 0; n < BK_MODBUS_BUSES; n++)
-		if (bk.bus[n].used &&
-		    bk.bus[n].timeout_ms * (bk.bus[n].retries + 1) >= cfg.drive_timeout_ms)
+		if (bk->bus[n].used &&
+		    bk->bus[n].timeout_ms * (bk->bus[n].retries + 1) >= cfg->drive_timeout_ms)
 			rt_log(
 			    LOG_WARNING,
 			    "modbus bus %u: timeout_ms x (retries + 1) = %u ms reaches the drive "
 			    "timeout (%u ms): one lost reply can trip it",
-			    n, bk.bus[n].timeout_ms * (bk.bus[n].retries + 1),
-			    (unsigned)cfg.drive_timeout_ms);
+			    n, bk->bus[n].timeout_ms * (bk->bus[n].retries + 1),
+			    (unsigned)cfg->drive_timeout_ms);
+}
 
+/* The configuration, the backends and the unit. Returns 0 or -1 (logged). */
+static int open_unit(app_t *a, const opts_t *o, backend_cfg_t *bk)
+{
+	vs_config_t cfg;
+	hal_io_map_t io_map;
+	char err[512];
+
+	if (config_load(o->config_path, o->io_path, &cfg, &io_map, err, sizeof(err)) < 0 ||
+	    backend_cfg_load(o->config_path, bk, err, sizeof(err)) < 0) {
+		rt_log(LOG_ERR, "%s", err);
+		return -1;
+	}
+	if (lhal_open(&a->hal, bk, &io_map, vs_config_axes(&cfg), err, sizeof(err)) < 0) {
+		rt_log(LOG_ERR, "%s", err);
+		return -1;
+	}
+	check_config(a, &cfg, bk);
 	a->vh.ops = &lhal_ops;
 	a->vh.ctx = &a->hal;
 	const char *bad = NULL;
 	if (vehicle_init(&a->v, &cfg, &a->vh, &bad) < 0) {
-		rt_log(LOG_ERR, "%s: configuration rejected: %s", config_path, bad ? bad : "?");
+		rt_log(LOG_ERR, "%s: configuration rejected: %s", o->config_path, bad ? bad : "?");
 		lhal_close(&a->hal);
-		return 1;
+		return -1;
 	}
-	a->period_us = 1000000u / cfg.tick_hz;
+	rt_clock_start(&a->clk, 1000000u / cfg.tick_hz);
+	return 0;
+}
 
-	if (port) {
-		a->in_fd = vc_tty_open(port, (unsigned)baud);
+/* The command server: the serial link on --port or stdin/stdout, and the
+ * CAN link on --can. Returns 0 or -1 (logged). */
+static int open_links(app_t *a, const opts_t *o)
+{
+	if (o->port) {
+		a->in_fd = tty_open(o->port, (unsigned)o->baud);
 		if (a->in_fd < 0) {
-			rt_log(LOG_ERR, "%s: %s", port, strerror(errno));
-			lhal_close(&a->hal);
-			return 1;
+			rt_log(LOG_ERR, "%s: %s", o->port, strerror(errno));
+			return -1;
 		}
 		a->out_fd = a->in_fd;
 	} else {
@@ -363,10 +368,77 @@ int main(int argc, char **argv)
 		a->out_fd = STDOUT_FILENO;
 		fcntl(STDIN_FILENO, F_SETFL, fcntl(STDIN_FILENO, F_GETFL) | O_NONBLOCK);
 	}
-	console_init(&a->con, &a->v, no_write, NULL);
-	console_set_extra(&a->con, rt_extra, a);
+	server_init(&a->srv, &a->v, rt_extra, a, NULL, NULL);
 	vs_link_t lio = {port_read, port_write, a};
-	link_init(&a->link, &a->con, &lio);
+	server_attach_serial(&a->srv, &lio);
+
+	a->can.fd = -1;
+	if (!o->can_iface)
+		return 0;
+	/* Only the request identifier reaches the unit; the kernel filters. */
+	uint32_t id = CANLINK_ID_REQUEST + (uint32_t)o->can_node;
+	canlink_config_t cc = {.node = (uint8_t)o->can_node, .status_hz = (uint16_t)o->can_hz};
+	if (sockcan_open(&a->can, o->can_iface, &id, 1) < 0) {
+		rt_log(LOG_ERR, "CAN interface %s: %s", o->can_iface, strerror(errno));
+		return -1;
+	}
+	vs_can_port_t port = sockcan_port(&a->can);
+	if (server_attach_can(&a->srv, &a->canlink, &port, &cc) <
+	    0) { /* the options were checked */
+		rt_log(LOG_ERR, "CAN link configuration rejected");
+		return -1;
+	}
+	return 0;
+}
+
+static void log_exit(app_t *a, const backend_cfg_t *bk)
+{
+	vs_diag_t d;
+	char c[400];
+
+	vehicle_diag(&a->v, &d);
+	rt_log(LOG_INFO,
+	       "exit: %llu ticks, %llu late wake-ups (max %u us), %llu periods skipped, "
+	       "busiest period %u us, %u firmware overruns",
+	       (unsigned long long)a->st.ticks, (unsigned long long)a->st.late, a->st.max_late_us,
+	       (unsigned long long)a->st.skipped, a->st.busy_max_us, d.overruns);
+	if (bk->battery_source != BK_BATTERY_FIXED)
+		rt_log(LOG_INFO, "exit: %u failed battery reads", a->hal.battery_errors);
+	for (unsigned b = 0; b < BK_CANOPEN_BUSES; b++)
+		if (a->hal.can[b].used) {
+			co_bus_counters(&a->hal.can[b], c, sizeof(c));
+			rt_log(LOG_INFO, "exit: %s", c);
+		}
+	if (a->srv.can) {
+		size_t n;
+		server_can_counters(&a->srv, c, sizeof(c));
+		n = strlen(c);
+		c[n++] = ' ';
+		sockcan_counters(&a->can, c + n, sizeof(c) - n);
+		rt_log(LOG_INFO, "CAN counters: %s", c);
+	}
+}
+
+int main(int argc, char **argv)
+{
+	opts_t o = {.config_path = DEFAULT_CONFIG,
+		    .baud = VS_LINK_DEFAULT_BAUD,
+		    .prio = DEFAULT_RT_PRIO,
+		    .can_node = CANLINK_NODE_DEFAULT,
+		    .can_hz = CANLINK_STATUS_HZ_DEFAULT};
+	int rc = parse_args(argc, argv, &o);
+	if (rc >= 0)
+		return rc;
+	rt_log_open("vehicle-fw", o.use_syslog);
+
+	app_t *a = &app;
+	backend_cfg_t bk;
+	if (open_unit(a, &o, &bk) < 0)
+		return 1;
+	if (open_links(a, &o) < 0) {
+		lhal_close(&a->hal);
+		return 1;
+	}
 
 	struct sigaction sa;
 	memset(&sa, 0, sizeof(sa));
@@ -376,37 +448,26 @@ int main(int argc, char **argv)
 	sigaction(SIGTERM, &sa, NULL);
 	signal(SIGPIPE, SIG_IGN);
 
-	rt_setup((int)prio, &a->rt);
-	rt_log(LOG_INFO, "%s, %u axes, %u Hz, link on %s (%lu 8N1), %s%s", config_path, naxes,
-	       cfg.tick_hz, port ? port : "stdin/stdout", baud,
+	rt_setup((int)o.prio, &a->rt);
+	rt_log(LOG_INFO, "%s, %u axes, %u Hz, link on %s (%lu 8N1), %s%s", o.config_path,
+	       a->v.naxes, a->v.cfg.tick_hz, o.port ? o.port : "stdin/stdout", o.baud,
 	       a->rt.fifo ? "SCHED_FIFO" : "SCHED_OTHER", a->rt.locked ? ", memory locked" : "");
+	if (o.can_iface)
+		rt_log(LOG_INFO, "CAN link on %s, node %lu, status %lu Hz", o.can_iface, o.can_node,
+		       o.can_hz);
 
-	struct timespec next;
-	clock_gettime(CLOCK_MONOTONIC, &a->t0);
-	next = a->t0;
+	rt_clock_start(&a->clk, a->clk.period_us);
 	while (!stop_requested) {
 		tick(a, true);
-		wait_next(a, &next);
+		rt_clock_wait(&a->clk, &a->st);
 	}
 	rt_log(LOG_INFO, "signal: stopping the unit");
-	shutdown_unit(a, &next);
-	vs_diag_t d;
-	vehicle_diag(&a->v, &d);
-	rt_log(LOG_INFO,
-	       "exit: %llu ticks, %llu late wake-ups (max %u us), %llu periods skipped, "
-	       "busiest period %u us, %u firmware overruns",
-	       (unsigned long long)a->st.ticks, (unsigned long long)a->st.late, a->st.max_late_us,
-	       (unsigned long long)a->st.skipped, a->st.busy_max_us, d.overruns);
-	if (bk.battery_source != BK_BATTERY_FIXED)
-		rt_log(LOG_INFO, "exit: %u failed battery reads", a->hal.battery_errors);
-	for (unsigned b = 0; b < BK_CANOPEN_BUSES; b++)
-		if (a->hal.can[b].used) {
-			char c[200];
-			co_bus_counters(&a->hal.can[b], c, sizeof(c));
-			rt_log(LOG_INFO, "exit: %s", c);
-		}
+	shutdown_unit(a);
+	log_exit(a, &bk);
 	lhal_close(&a->hal);
-	if (port)
+	if (o.port)
 		close(a->in_fd);
+	if (a->can.fd >= 0)
+		sockcan_close(&a->can);
 	return 0;
 }

@@ -6,10 +6,13 @@
 #include <linux/can/raw.h>
 #include <net/if.h>
 #include <poll.h>
+#include <stdio.h>
 #include <string.h>
 #include <sys/ioctl.h>
 #include <sys/socket.h>
 #include <unistd.h>
+
+#include "rt.h"
 
 /* Most receive filters one socket installs. */
 #define SOCKCAN_MAX_FILTERS 16
@@ -152,4 +155,43 @@ void sockcan_close(sockcan_t *s)
 	if (s->fd >= 0)
 		close(s->fd);
 	s->fd = -1;
+}
+
+static void report_once(sockcan_t *s, const char *what)
+{
+	if (!s->reported)
+		rt_log(LOG_ERR, "CAN %s: %s", what, strerror(errno));
+	s->reported = true;
+}
+
+static int port_recv(void *ctx, canlink_frame_t *f)
+{
+	int r = sockcan_recv(ctx, f);
+
+	if (r < 0)
+		report_once(ctx, "receive");
+	return r;
+}
+
+/* Interface down, for instance: say so once, keep serving. */
+static bool port_send(void *ctx, const canlink_frame_t *f)
+{
+	int r = sockcan_send(ctx, f);
+
+	if (r < 0)
+		report_once(ctx, "send");
+	return r > 0;
+}
+
+vs_can_port_t sockcan_port(sockcan_t *s)
+{
+	vs_can_port_t p = {port_recv, port_send, s};
+	return p;
+}
+
+void sockcan_counters(const sockcan_t *s, char *buf, size_t cap)
+{
+	snprintf(buf, cap, "sock_tx_full %lu sock_rx_dropped %lu sock_rx_overflow %lu",
+		 (unsigned long)s->tx_full, (unsigned long)s->rx_dropped,
+		 (unsigned long)s->rx_overflow);
 }

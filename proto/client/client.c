@@ -9,7 +9,7 @@
 typedef void (*vc_any_fn)(void);
 static const vc_any_fn vc_fns[] __attribute__((unused)) = {
 #define VS_CMD(name, op, it, in, ot, on, help) (vc_any_fn) vc_##name,
-#include "commands.def"
+#include "../commands.def"
 #undef VS_CMD
 };
 

@@ -1,4 +1,4 @@
-/* Log sink and real-time setup of vehicle-fw; see rt.h. */
+/* Log sink, real-time setup and loop timing of the host programs; see rt.h. */
 #include "rt.h"
 
 #include <errno.h>
@@ -9,12 +9,14 @@
 #include <sys/mman.h>
 
 static bool log_syslog;
+static const char *log_ident = "vehicle-fw"; /* until rt_log_open */
 
-void rt_log_open(bool use_syslog)
+void rt_log_open(const char *ident, bool use_syslog)
 {
+	log_ident = ident;
 	log_syslog = use_syslog;
 	if (use_syslog)
-		openlog("vehicle-fw", LOG_PID, LOG_DAEMON);
+		openlog(ident, LOG_PID, LOG_DAEMON);
 }
 
 void rt_log(int prio, const char *fmt, ...)
@@ -24,7 +26,7 @@ void rt_log(int prio, const char *fmt, ...)
 	if (log_syslog) {
 		vsyslog(prio, fmt, ap);
 	} else {
-		fputs("vehicle-fw: ", stderr);
+		fprintf(stderr, "%s: ", log_ident);
 		if (prio <= LOG_WARNING)
 			fputs(prio <= LOG_ERR ? "error: " : "warning: ", stderr);
 		vfprintf(stderr, fmt, ap);
@@ -71,4 +73,40 @@ void ts_add_ns(struct timespec *t, long long ns)
 long long ts_diff_ns(const struct timespec *a, const struct timespec *b)
 {
 	return (long long)(a->tv_sec - b->tv_sec) * 1000000000LL + (a->tv_nsec - b->tv_nsec);
+}
+
+void rt_clock_start(rt_clock_t *c, uint32_t period_us)
+{
+	c->period_us = period_us;
+	clock_gettime(CLOCK_MONOTONIC, &c->t0);
+	c->next = c->t0;
+}
+
+uint32_t rt_clock_now_us(const rt_clock_t *c)
+{
+	struct timespec t;
+
+	clock_gettime(CLOCK_MONOTONIC, &t);
+	return (uint32_t)((unsigned long long)ts_diff_ns(&t, &c->t0) / 1000ull);
+}
+
+void rt_clock_wait(rt_clock_t *c, rt_stats_t *st)
+{
+	struct timespec now;
+
+	ts_add_ns(&c->next, (long long)c->period_us * 1000LL);
+	while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &c->next, NULL) == EINTR)
+		;
+	clock_gettime(CLOCK_MONOTONIC, &now);
+	long long late = ts_diff_ns(&now, &c->next);
+	if (st && late > (long long)c->period_us * 500LL)
+		st->late++;
+	if (st && late > 0 && (unsigned long long)late / 1000ull > st->max_late_us)
+		st->max_late_us = (uint32_t)((unsigned long long)late / 1000ull);
+	if (late > RT_SKIP_AFTER_NS) {
+		if (st)
+			st->skipped +=
+			    (unsigned long long)late / ((unsigned long long)c->period_us * 1000ull);
+		c->next = now;
+	}
 }
