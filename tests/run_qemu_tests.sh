@@ -24,7 +24,8 @@ if ! out=$("$top/tools/qemu/setup.sh" 2>&1); then
 	summary 0 1
 	exit 1
 fi
-for f in "$build/vehicle-sim" "$build/vehiclectl" "$build/vehicle-corba" "$build/tests/vs-corba-client"; do
+for f in "$build/vehicle-sim" "$build/vehicle-fw" "$build/vehiclectl" "$build/vehicle-corba" \
+	"$build/tests/vs-corba-client"; do
 	[ -x "$f" ] || { echo "qemu: $f missing: run make first"; summary 0 1; exit 1; }
 done
 
@@ -88,6 +89,7 @@ run can_link.sh "${common[@]}"
 run can_peers.sh "${common[@]}" "$here/qemu/can_python.py" "$here/qemu/can_vs.py" "${pyfiles[@]}"
 run can_isotp.sh "${common[@]}"
 run can_watchdog.sh "${common[@]}"
+run can_fw.sh "${common[@]}" "$build/vehicle-fw"
 run can_corba.sh "${common[@]}" "$build/vehicle-corba" "$build/tests/vs-corba-client"
 echo "qemu: guests took $(($(date +%s) - t0)) s"
 [ -n "$failed_names" ] && echo "qemu: FAILED:$failed_names"
