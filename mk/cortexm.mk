@@ -31,7 +31,7 @@ MCU_CPU_cortex-m0 := -mcpu=cortex-m0 -mthumb -mfloat-abi=soft
 FW_FLOAT_OK := firmware/vs_api.c firmware/config.c
 # The console and binary-frame parsers; the host client and CAN mapping stay on the host.
 MCU_PROTO_SRC := $(filter $(addprefix proto/,cmdtab.c dispatch.c console.c fmt.c numparse.c wire.c frame.c \
-	frame_srv.c link.c server.c),$(PROTO_SRC))
+	frame_srv.c link.c port.c server.c),$(PROTO_SRC))
 MCU_BOARD_SRC := $(addprefix hal/cortexm/,startup.c systick.c uart.c loop_hal.c board_main.c \
 	small_libc.c)
 

@@ -10,20 +10,39 @@
 #   client      vehiclectl links no firmware object (nm): the client library
 #               uses the command table and the encodings, never the unit
 #   includes    the folder rules of docs/architecture.md (tools/lint/includes.py)
-# tests/ are excluded from the analysers (cmocka macros); they build with
-# -Wall -Wextra -Werror.
-# Also in the set: hal/linux/ (the vehicle-fw backends, mk/linux.mk), its
-# drive and joystick simulators, and the programs' mains in tools/. Not yet:
-# hal/cortexm/ (it needs the ARM target) and tools/bench/, tools/ref/.
-
+# Every tracked C file is in one of the sets below:
+#   LINT_SRC       host code, all checks: firmware/, proto/, hal/posix/,
+#                  hal/linux/, host_sim/ (devices too), the tools and
+#                  benchmarks, the guest probe
+#   LINT_MCU_SRC   hal/cortexm/ and the board benchmark: cppcheck, and
+#                  clang-tidy for the Cortex-M4 target (LINT_MCU_DEFS)
+#   LINT_TEST_SRC  tests/: cppcheck; not clang-tidy, whose checks misread
+#                  cmocka's macros; they build with -Wall -Wextra -Werror
+#   the gpio test chip (tools/qemu/gpio-testchip), a kernel module: cppcheck
+#                  without the kernel's headers; kbuild compiles it with the
+#                  kernel's warnings
+LINT_MCU_SRC := $(wildcard hal/cortexm/*.c hal/cortexm/nofloat_test/*.c) tools/bench/mcu_tickcost.c
 LINT_SRC := $(FW_SRC) $(PROTO_SRC) $(HOST_SRC) $(SIM_SRC) $(wildcard host_sim/*_main.c) \
-	$(wildcard hal/linux/*.c host_sim/devices/*.c tools/*.c)
+	$(wildcard hal/linux/*.c host_sim/devices/*.c tools/*.c tools/ref/*.c) \
+	$(filter-out $(LINT_MCU_SRC),$(wildcard tools/bench/*.c)) tests/qemu/uinput_probe.c
+LINT_TEST_SRC := $(filter-out tests/qemu/uinput_probe.c,$(wildcard tests/*.c tests/*/*.c))
+LINT_KMOD_SRC := tools/qemu/gpio-testchip/gpio_testchip.c
 LINT_DEFS := -std=c11 -I. -D_GNU_SOURCE -I/usr/include/libevdev-1.0
+LINT_MCU_DEFS := -std=c11 -I. --target=arm-none-eabi -mcpu=cortex-m4 -mthumb -ffreestanding \
+	-DMOTION_QUEUE_LEN=16 -isystem /usr/lib/arm-none-eabi/include
 CLANG ?= clang
 
-.PHONY: lint lint-cppcheck lint-tidy lint-warnings lint-format lint-client lint-includes
+.PHONY: lint lint-cppcheck lint-tidy lint-warnings lint-format lint-client lint-includes lint-sets
 
-lint: lint-format lint-includes lint-cppcheck lint-warnings lint-tidy lint-client
+lint: lint-sets lint-format lint-includes lint-cppcheck lint-warnings lint-tidy lint-client
+
+# A C file that no set names fails: a new folder cannot slip past lint.
+lint-sets:
+	@echo "  SETS    every tracked C file is analysed"
+	$(Q)printf '%s\n' $(LINT_SRC) $(LINT_MCU_SRC) $(LINT_TEST_SRC) $(LINT_KMOD_SRC) | \
+		LC_ALL=C sort -u >$(BUILD)/lint-sets
+	$(Q)miss=$$(git ls-files '*.c' | LC_ALL=C sort | LC_ALL=C comm -23 - $(BUILD)/lint-sets); \
+	if [ -n "$$miss" ]; then echo "not in any lint set:" $$miss; exit 1; fi
 
 # What may include what (docs/architecture.md); the self-test first proves
 # that each rule catches its violation.
@@ -45,15 +64,21 @@ lint-format:
 	$(Q)git ls-files '*.c' '*.h' | xargs clang-format --dry-run -Werror
 
 lint-cppcheck:
-	@echo "  CPPCHECK firmware proto hal host_sim tools"
+	@echo "  CPPCHECK $(words $(LINT_SRC) $(LINT_MCU_SRC) $(LINT_TEST_SRC) $(LINT_KMOD_SRC)) files"
 	$(Q)cppcheck --quiet --std=c11 --enable=warning,style,performance,portability \
 		--inline-suppr --suppressions-list=tools/lint/cppcheck.supp --error-exitcode=1 \
-		-D_GNU_SOURCE -I. -I/usr/include/libevdev-1.0 $(LINT_SRC)
+		-D_GNU_SOURCE -I. -I/usr/include/libevdev-1.0 $(LINT_SRC) $(LINT_MCU_SRC) \
+		$(LINT_TEST_SRC)
+	$(Q)cppcheck --quiet --std=c11 --enable=warning,style,performance,portability \
+		--inline-suppr --suppressions-list=tools/lint/cppcheck.supp --error-exitcode=1 \
+		$(LINT_KMOD_SRC)
 
 lint-tidy:
-	@echo "  TIDY    $(words $(LINT_SRC)) files"
+	@echo "  TIDY    $(words $(LINT_SRC) $(LINT_MCU_SRC)) files"
 	$(Q)fail=0; for f in $(LINT_SRC); do \
 		clang-tidy --quiet $$f -- $(LINT_DEFS) 2>/dev/null || fail=1; \
+	done; for f in $(LINT_MCU_SRC); do \
+		clang-tidy --quiet $$f -- $(LINT_MCU_DEFS) 2>/dev/null || fail=1; \
 	done; exit $$fail
 
 lint-warnings:

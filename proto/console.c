@@ -645,3 +645,13 @@ void console_feed(console_t *c, const uint8_t *data, size_t n)
 		c->line[c->len++] = (char)b;
 	}
 }
+
+void console_rx(void *console, const uint8_t *data, size_t n)
+{
+	console_feed(console, data, n);
+}
+
+bool console_holds_sync(void *console)
+{
+	return console_in_text(console);
+}

@@ -55,6 +55,11 @@ void console_init(console_t *c, vehicle_t *v, console_write_fn write, void *wctx
 void console_set_extra(console_t *c, console_extra_fn fn, void *ctx);
 /* Feed received bytes; replies are written as whole lines ending in "\n". */
 void console_feed(console_t *c, const uint8_t *data, size_t n);
+/* The same two as the frame receiver's sinks (frame_other_fn, frame_hold_fn
+ * on a console_t): on the serial link the bytes outside frames come here,
+ * and a sync byte inside a line of text stays in the line. */
+void console_rx(void *console, const uint8_t *data, size_t n);
+bool console_holds_sync(void *console);
 /* True while a line of text is in progress: its first byte was printable
  * ASCII (0x20..0x7E) or a tab, and every byte since has been printable
  * ASCII, a tab or 0x80..0xFF (UTF-8), up to its line ending. The serial

@@ -23,24 +23,27 @@
 #include "../hal/link.h"
 #include "console.h"
 #include "frame.h"
+#include "port.h"
 
 typedef struct {
-	vs_link_t io;
+	port_t port;
 	console_t *con;
 	frame_srv_t fs;
 	console_extra_fn next_extra; /* the console's own extra handler */
 	void *next_xctx;
-	uint32_t tx_dropped; /* bytes the port did not take */
 } link_t;
 
-/* Takes over con's output (console replies now go to io.write) and adds
- * "$link" in front of con's extra handler. con drives v. */
+/* Wires con and a frame server to one port: bytes outside frames go to the
+ * console, every answer to the port (port.h), "$link" in front of con's
+ * extra handler. con drives v. Nothing of the link is called back: the
+ * frame receiver feeds the console itself (console_rx, console_holds_sync). */
 void link_init(link_t *l, console_t *con, const vs_link_t *io);
-/* Reads everything pending on io.read and processes it, then applies the
- * frame inter-byte timeout. Never blocks. Returns the bytes read. */
-size_t link_poll(link_t *l, uint32_t now_ms);
-/* Processes received bytes directly (no io.read). */
-void link_feed(link_t *l, const uint8_t *data, size_t n, uint32_t now_ms);
+/* Processes received bytes; the owner reads the port (server_poll, or the
+ * board one byte at a time). */
+static inline void link_feed(link_t *l, const uint8_t *data, size_t n, uint32_t now_ms)
+{
+	frame_srv_feed(&l->fs, data, n, now_ms);
+}
 /* The counters as one "ok frames ..." line (no newline). */
 void link_format_stats(const link_t *l, char *buf, size_t cap);
 

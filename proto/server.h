@@ -37,6 +37,7 @@ struct vs_server {
 	canlink_t *can; /* the main's storage: a board without CAN pays no RAM */
 	vs_can_port_t can_port;
 	uint32_t can_port_errors;			   /* receive errors the port reported */
+	uint32_t last_us, us_rem, now_ms;		   /* server_poll's millisecond clock */
 	void (*poll_can)(vs_server_t *s, uint32_t now_us); /* set by server_attach_can */
 };
 

@@ -490,8 +490,11 @@ static canlink_frame_t frame(uint32_t id, uint8_t dlc, const char *hex)
 	memset(&f, 0, sizeof(f));
 	f.id = id;
 	f.dlc = dlc;
-	for (unsigned i = 0; i < 8 && hex[2 * i] && hex[2 * i + 1]; i++) {
+	size_t len = strlen(hex);
+	for (unsigned i = 0; i < 8 && 2 * i + 1 < len; i++) {
 		unsigned b;
+		/* within hex: 2 * i + 1 < len */
+		// cppcheck-suppress pointerOutOfBounds
 		sscanf(hex + 2 * i, "%2x", &b);
 		f.data[i] = (uint8_t)b;
 	}

@@ -32,10 +32,9 @@
 #include "../host_sim/sim.h"
 #include "../hal/posix/tty.h"
 #include "../proto/client/client.h"
-#include "../proto/link.h"
+#include "../proto/server.h"
 
 static sim_t S;
-static link_t L;
 static int MASTER = -1, SLAVE = -1;
 static pthread_t TH;
 static pthread_mutex_t MU = PTHREAD_MUTEX_INITIALIZER;
@@ -69,7 +68,7 @@ static void *unit_thread(void *arg)
 	(void)arg;
 	while (RUN) {
 		pthread_mutex_lock(&MU);
-		link_poll(&L, mono_ms());
+		server_poll(&S.srv, (uint32_t)(mono_ms() * 1000u));
 		sim_tick(&S);
 		pthread_mutex_unlock(&MU);
 		usleep(100);
@@ -98,7 +97,7 @@ static int setup(void **state)
 	if (tty_set_raw(SLAVE, 115200) != 0 || tty_set_raw(MASTER, 0) != 0)
 		return -1;
 	fcntl(MASTER, F_SETFL, fcntl(MASTER, F_GETFL) | O_NONBLOCK);
-	link_init(&L, &S.srv.con, &io);
+	server_attach_serial(&S.srv, &io);
 	RUN = 1;
 	return pthread_create(&TH, NULL, unit_thread, NULL) == 0 ? 0 : -1;
 }
@@ -341,15 +340,15 @@ static void test_binary_client(void **state)
 {
 	(void)state;
 	client_session(false);
-	assert_true(L.fs.st.executed >= 14);
-	assert_int_equal(L.fs.st.naks, 0);
+	assert_true(S.srv.serial.fs.st.executed >= 14);
+	assert_int_equal(S.srv.serial.fs.st.naks, 0);
 }
 
 static void test_console_client(void **state)
 {
 	(void)state;
 	client_session(true);
-	assert_int_equal(L.fs.st.executed, 0);
+	assert_int_equal(S.srv.serial.fs.st.executed, 0);
 }
 
 /* The same frame twice: answered twice, run once. */
@@ -372,7 +371,7 @@ static void test_retransmission_runs_once(void **state)
 	    WIRE_ST_OK);
 	n = frame_encode(f, sizeof(f), 0x42, CMD_OP_moveForward, pay, len);
 	pthread_mutex_lock(&MU);
-	uint32_t ex0 = L.fs.st.executed, dup0 = L.fs.st.duplicates;
+	uint32_t ex0 = S.srv.serial.fs.st.executed, dup0 = S.srv.serial.fs.st.duplicates;
 	pthread_mutex_unlock(&MU);
 	host_drain();
 	host_write(f, n);
@@ -385,8 +384,8 @@ static void test_retransmission_runs_once(void **state)
 	assert_int_equal(a1[5], WIRE_ST_OK);
 	assert_int_equal(a1[6], 1); /* true: the one run was accepted */
 	pthread_mutex_lock(&MU);
-	assert_int_equal(L.fs.st.executed, ex0 + 1);
-	assert_int_equal(L.fs.st.duplicates, dup0 + 1);
+	assert_int_equal(S.srv.serial.fs.st.executed, ex0 + 1);
+	assert_int_equal(S.srv.serial.fs.st.duplicates, dup0 + 1);
 	pthread_mutex_unlock(&MU);
 	assert_int_equal(vc_attach_serial_fd(&C, SLAVE, false), VC_OK);
 	wait_idle_client();
@@ -432,8 +431,8 @@ static void test_bad_input(void **state)
 	CON("getState", "ok true 21 \"Paused\"");
 	pthread_mutex_lock(&MU);
 	vehicle_diag(&S.vehicle, &d0);
-	r0 = L.fs.rx.st;
-	ex0 = L.fs.st.executed;
+	r0 = S.srv.serial.fs.rx.st;
+	ex0 = S.srv.serial.fs.st.executed;
 	pthread_mutex_unlock(&MU);
 	assert_int_equal(d0.queue_len, 1);
 
@@ -484,8 +483,8 @@ static void test_bad_input(void **state)
 
 	pthread_mutex_lock(&MU);
 	vehicle_diag(&S.vehicle, &d1);
-	r1 = L.fs.rx.st;
-	ex1 = L.fs.st.executed;
+	r1 = S.srv.serial.fs.rx.st;
+	ex1 = S.srv.serial.fs.st.executed;
 	pthread_mutex_unlock(&MU);
 	assert_int_equal(ex1, ex0); /* nothing ran */
 	assert_int_equal(d1.queue_len, 1);
@@ -494,7 +493,7 @@ static void test_bad_input(void **state)
 	assert_true(r1.oversize >= r0.oversize + 2);
 	assert_true(r1.truncated > r0.truncated);
 	assert_true(r1.other_bytes > r0.other_bytes);
-	assert_true(L.fs.st.naks >= 8);
+	assert_true(S.srv.serial.fs.st.naks >= 8);
 
 	/* resynchronised: both protocols answer at once */
 	CON("getState", "ok true 21 \"Paused\"");

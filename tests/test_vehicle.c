@@ -147,12 +147,10 @@ static bool mv_jog(void)
 static const struct {
 	move_fn fn;
 	const char *name;
-	bool ready_only;
 } MOVES[] = {
-    {mv_forward, "moveForward", true},	   {mv_turn, "moveTurn", true},
-    {mv_linrel, "moveLinearRel", true},	   {mv_circ, "moveCircularRel", true},
-    {mv_linabs, "moveLinearAbs", false},   {mv_cruise, "moveCruiseAbs", false},
-    {mv_cont, "moveContinuousRel", false}, {mv_jog, "moveJog", false},
+    {mv_forward, "moveForward"},    {mv_turn, "moveTurn"},	  {mv_linrel, "moveLinearRel"},
+    {mv_circ, "moveCircularRel"},   {mv_linabs, "moveLinearAbs"}, {mv_cruise, "moveCruiseAbs"},
+    {mv_cont, "moveContinuousRel"}, {mv_jog, "moveJog"},
 };
 #define NMOVES (sizeof MOVES / sizeof MOVES[0])
 

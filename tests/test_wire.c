@@ -189,6 +189,8 @@ static void test_dispatch(void **state)
 	assert_int_equal(n, 1);
 	assert_int_equal(resp[0], 1);
 	n = wire_dispatch(&S.vehicle, CMD_OP_setServo, req, 1, resp, sizeof(resp), &st);
+	assert_int_equal(st, WIRE_ST_OK);
+	assert_int_equal(n, 1);
 	assert_int_equal(resp[0], 1);
 	/* malformed requests: nothing runs */
 	in[0].d = 500;
@@ -201,13 +203,17 @@ static void test_dispatch(void **state)
 	assert_int_equal(n, 0);
 	n = wire_dispatch(&S.vehicle, CMD_OP_moveForward, req, 9, resp, sizeof(resp), &st);
 	assert_int_equal(st, WIRE_ST_LENGTH);
+	assert_int_equal(n, 0);
 	n = wire_dispatch(&S.vehicle, 0, req, 8, resp, sizeof(resp), &st);
 	assert_int_equal(st, WIRE_ST_OPCODE);
+	assert_int_equal(n, 0);
 	n = wire_dispatch(&S.vehicle, 35, req, 8, resp, sizeof(resp), &st);
 	assert_int_equal(st, WIRE_ST_OPCODE);
+	assert_int_equal(n, 0);
 	req[8] = 2;
 	n = wire_dispatch(&S.vehicle, CMD_OP_setPower, req + 8, 1, resp, sizeof(resp), &st);
 	assert_int_equal(st, WIRE_ST_VALUE);
+	assert_int_equal(n, 0);
 	vehicle_diag(&S.vehicle, &d);
 	assert_int_equal(d.queue_len, 0);
 	assert_int_equal(d.mode, 0);

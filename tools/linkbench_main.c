@@ -16,10 +16,9 @@
 #include "../host_sim/sim.h"
 #include "../hal/posix/tty.h"
 #include "../proto/client/client.h"
-#include "../proto/link.h"
+#include "../proto/server.h"
 
 static sim_t S;
-static link_t L;
 static int M = -1;
 static volatile int run_unit = 1;
 
@@ -48,7 +47,7 @@ static void *unit(void *arg)
 {
 	(void)arg;
 	while (run_unit) {
-		link_poll(&L, (uint32_t)(now_s() * 1000));
+		server_poll(&S.srv, (uint32_t)(uint64_t)(now_s() * 1e6));
 		sim_tick(&S);
 		usleep(1000);
 	}
@@ -85,7 +84,7 @@ int main(void)
 	tty_set_raw(s, 115200);
 	tty_set_raw(M, 0);
 	fcntl(M, F_SETFL, fcntl(M, F_GETFL) | O_NONBLOCK);
-	link_init(&L, &S.srv.con, &io);
+	server_attach_serial(&S.srv, &io);
 	pthread_create(&th, NULL, unit, NULL);
 	vc_attach_serial_fd(c, s, true);
 	vc_getPosition(c, NULL, &pos); /* first call also does the info handshake */

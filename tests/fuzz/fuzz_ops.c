@@ -209,13 +209,13 @@ static void check_tick(void)
 	if (!armed) {
 		if (!twist_zero(t))
 			abort(); /* moving without a command */
-		double x, y, th;
-		plant_pose(&S.plant, &x, &y, &th);
+		double x, y, pth;
+		plant_pose(&S.plant, &x, &y, &pth);
 		if (!have_rest) {
-			rest_x = x, rest_y = y, rest_th = th;
+			rest_x = x, rest_y = y, rest_th = pth;
 			have_rest = true;
 		}
-		double dth = fabs(th - rest_th);
+		double dth = fabs(pth - rest_th);
 		if (dth > 180.0)
 			dth = 360.0 - dth;
 		double lim_mm = encoder_frozen ? c->following_error_mm * 1.5 + 2.0 : 2.0;

@@ -20,6 +20,7 @@
 
 #define DEV_NAME "vs-test-gamepad"
 
+static void fail(const char *fmt, ...) __attribute__((noreturn, format(printf, 1, 2)));
 static void fail(const char *fmt, ...)
 {
 	va_list ap;

@@ -45,8 +45,9 @@ static void queue_route(void)
 
 int main(int argc, char **argv)
 {
-	double secs = argc > 1 ? atof(argv[1]) : 60.0;
-	if (!(secs >= 1.0 && secs <= 3600.0)) {
+	char *end = NULL;
+	double secs = argc > 1 ? strtod(argv[1], &end) : 60.0;
+	if (!(secs >= 1.0 && secs <= 3600.0) || (end && *end != '\0')) {
 		fprintf(stderr, "usage: looplat [SECONDS 1..3600]\n");
 		return 2;
 	}

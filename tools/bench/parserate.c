@@ -62,7 +62,8 @@ static double rate(void (*run)(unsigned))
 			reps += 100;
 			t = now_s() - t0;
 		} while (t < 0.2);
-		double r = (double)reps * MIX_N / t;
+		size_t mix_n = MIX_N;
+		double r = (double)reps * (double)mix_n / t;
 		if (r > best)
 			best = r;
 	}
@@ -118,16 +119,16 @@ static void build_frames(void)
 		for (unsigned i = 0; i < d->n_in; i++) {
 			switch (d->in_types[i]) {
 			case CMD_T_DOUBLE:
-				in[i].d = atof(argv[i + 1]);
+				in[i].d = strtod(argv[i + 1], NULL);
 				break;
 			case CMD_T_SHORT:
-				in[i].h = (int16_t)atoi(argv[i + 1]);
+				in[i].h = (int16_t)strtol(argv[i + 1], NULL, 10);
 				break;
 			case CMD_T_ULONG:
 				in[i].u = (uint32_t)strtoul(argv[i + 1], NULL, 10);
 				break;
 			case CMD_T_BOOL:
-				in[i].b = atoi(argv[i + 1]) != 0;
+				in[i].b = strtol(argv[i + 1], NULL, 10) != 0;
 				break;
 			default:
 				break;
