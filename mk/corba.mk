@@ -2,7 +2,7 @@
 # top Makefile).
 #
 #   build/vehicle-corba          the gateway: the appendix IDL served over
-#                                CORBA, each call forwarded through proto/client.h
+#                                CORBA, each call forwarded through proto/client/client.h
 #   build/tests/vs-corba-client  the test client, stubs from the same IDL
 #   make check                   tests/corba/run.sh: omniNames on loopback, the
 #                                gateway against vehicle-sim --pty --fast, the

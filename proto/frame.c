@@ -51,6 +51,13 @@ void frame_rx_init(frame_rx_t *rx, uint8_t *buf, size_t max_payload, frame_fn on
 	rx->on_frame = on_frame;
 	rx->on_other = on_other;
 	rx->ctx = ctx;
+	rx->octx = ctx;
+}
+
+void frame_rx_set_other(frame_rx_t *rx, frame_other_fn on_other, void *ctx)
+{
+	rx->on_other = on_other;
+	rx->octx = ctx;
 }
 
 static void report_bad(frame_rx_t *rx, const uint8_t *c, size_t avail, int status)
@@ -80,7 +87,7 @@ static void other(frame_rx_t *rx, const uint8_t *data, size_t n)
 {
 	rx->st.other_bytes += (uint32_t)n;
 	if (rx->on_other)
-		rx->on_other(rx->ctx, data, n);
+		rx->on_other(rx->octx, data, n);
 }
 
 /* Works through buf from the front: bytes before a sync go out as other

@@ -81,7 +81,7 @@ typedef struct {
 	uint32_t last_ms;
 	frame_fn on_frame;
 	frame_other_fn on_other;
-	void *ctx;
+	void *ctx, *octx;   /* of on_frame, of on_other */
 	frame_hold_fn hold; /* optional */
 	void *hold_ctx;
 	frame_rx_stats_t st;
@@ -91,6 +91,9 @@ typedef struct {
  * may be NULL (bytes outside frames are then only counted). */
 void frame_rx_init(frame_rx_t *rx, uint8_t *buf, size_t max_payload, frame_fn on_frame,
 		   frame_other_fn on_other, void *ctx);
+/* Sends the bytes outside frames to on_other(ctx, ...) instead (NULL: only
+ * counted). */
+void frame_rx_set_other(frame_rx_t *rx, frame_other_fn on_other, void *ctx);
 /* Sets the predicate that keeps a sync byte in the other stream (NULL: a
  * sync byte outside a frame always starts one). */
 void frame_rx_set_hold(frame_rx_t *rx, frame_hold_fn hold, void *ctx);
@@ -122,8 +125,6 @@ typedef struct {
 	uint8_t rxbuf[FRAME_REQ_MAX];
 	frame_write_fn write;
 	void *wctx;
-	frame_other_fn other;
-	void *octx;
 	bool have_last;
 	uint8_t last_seq, last_op;
 	uint16_t last_crc;
@@ -132,7 +133,8 @@ typedef struct {
 	frame_srv_stats_t st;
 } frame_srv_t;
 
-/* on_other: bytes that are not frames (the console); may be NULL. */
+/* on_other: bytes that are not frames (the console), handed on by the
+ * receiver itself; may be NULL. */
 void frame_srv_init(frame_srv_t *s, vehicle_t *v, frame_write_fn write, void *wctx,
 		    frame_other_fn on_other, void *octx);
 static inline void frame_srv_feed(frame_srv_t *s, const uint8_t *data, size_t n, uint32_t now_ms)

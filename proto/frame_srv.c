@@ -59,14 +59,6 @@ static void srv_frame(void *ctx, const frame_t *f)
 		s->write(s->wctx, s->last_resp, s->last_len);
 }
 
-static void srv_other(void *ctx, const uint8_t *data, size_t n)
-{
-	frame_srv_t *s = ctx;
-
-	if (s->other)
-		s->other(s->octx, data, n);
-}
-
 void frame_srv_init(frame_srv_t *s, vehicle_t *v, frame_write_fn write, void *wctx,
 		    frame_other_fn on_other, void *octx)
 {
@@ -74,7 +66,6 @@ void frame_srv_init(frame_srv_t *s, vehicle_t *v, frame_write_fn write, void *wc
 	s->v = v;
 	s->write = write;
 	s->wctx = wctx;
-	s->other = on_other;
-	s->octx = octx;
-	frame_rx_init(&s->rx, s->rxbuf, FRAME_REQ_PAYLOAD_MAX, srv_frame, srv_other, s);
+	frame_rx_init(&s->rx, s->rxbuf, FRAME_REQ_PAYLOAD_MAX, srv_frame, NULL, s);
+	frame_rx_set_other(&s->rx, on_other, octx);
 }
