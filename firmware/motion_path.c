@@ -86,165 +86,228 @@ static void corner_piece(motion_t *m, const motion_cmd_t *c)
 	g->p_end.th_deg = fx_wrap_deg(m->ref.th_deg + c->corner.phi_deg);
 }
 
+/* What one stage of a command did: set up a piece, found nothing to do
+ * (its next stage runs), or found the command finished. */
+typedef enum { STAGE_DONE, STAGE_PIECE, STAGE_SKIP } stage_t;
+
+static stage_t forward_stage(motion_t *m, motion_cmd_t *c)
+{
+	const fx_pose_t *r = &m->ref;
+	if (c->stage++ > 0)
+		return STAGE_DONE;
+	seg_line(m, r, c->target.x_mm, c->target.y_mm, r->th_deg);
+	if (m->seg.len < TINY_MM)
+		return STAGE_SKIP;
+	return STAGE_PIECE;
+}
+
+static stage_t turn_stage(motion_t *m, motion_cmd_t *c)
+{
+	if (c->stage++ > 0)
+		return STAGE_DONE;
+	if (fx_abs64(c->angle_deg) < 1)
+		return STAGE_SKIP;
+	seg_turn(m, c->angle_deg);
+	return STAGE_PIECE;
+}
+
+static stage_t arc_stage(motion_t *m, motion_cmd_t *c)
+{
+	const fx_pose_t *r = &m->ref;
+	if (c->stage++ > 0)
+		return STAGE_DONE;
+	seg_t *g = &m->seg;
+	*g = (seg_t){0};
+	g->kind = SEG_ARC;
+	g->p0 = *r;
+	g->cx = c->cx_mm;
+	g->cy = c->cy_mm;
+	g->dir = c->angle_deg < 0 ? -1 : 1;
+	g->len = fx_abs64(c->angle_deg);
+	g->p_end = c->target;
+	q32_t radius = fx_hypot(r->x_mm - c->cx_mm, r->y_mm - c->cy_mm);
+	g->arc_k = fx_mul(radius, DEG_TO_RAD_Q32);
+	/* Rigid rotation about the centre c (body frame): the body
+	 * moves at w x (-c) = w (c.y, -c.x). */
+	g->arc_kx = fx_mul(c->sy_mm, DEG_TO_RAD_Q32);
+	g->arc_ky = -fx_mul(c->sx_mm, DEG_TO_RAD_Q32);
+	if (g->len < 1)
+		return STAGE_SKIP;
+	return STAGE_PIECE;
+}
+
+/* A line to a pose, omni base: translation and rotation together, unless
+ * the move is mostly rotation (under 1 mm per degree): then the heading
+ * would ride on a tiny path ratio, so turn first and then translate. */
+static stage_t line_stage_omni(motion_t *m, motion_cmd_t *c)
+{
+	const fx_pose_t *r = &m->ref;
+	q32_t dx = c->target.x_mm - r->x_mm, dy = c->target.y_mm - r->y_mm;
+	q32_t dist = fx_hypot(dx, dy);
+	q32_t a = fx_wrap_deg(c->target.th_deg - r->th_deg);
+	bool split = fx_abs64(a) > FX_ONE / 1000 && dist < fx_abs64(a);
+	switch (c->stage++) {
+	case 0:
+		if (dist >= TINY_MM && !split) {
+			c->stage = 2;
+			seg_line(m, r, c->target.x_mm, c->target.y_mm, c->target.th_deg);
+			return STAGE_PIECE;
+		}
+		if (fx_abs64(a) < 1)
+			return STAGE_SKIP;
+		seg_turn(m, a);
+		return STAGE_PIECE;
+	case 1:
+		if (dist < TINY_MM)
+			return STAGE_SKIP;
+		seg_line(m, r, c->target.x_mm, c->target.y_mm, r->th_deg);
+		return STAGE_PIECE;
+	default:
+		return STAGE_DONE;
+	}
+}
+
+/* A line to a pose, differential base: face the target, drive to it, turn
+ * to the final heading. */
+static stage_t line_stage_diff(motion_t *m, motion_cmd_t *c)
+{
+	const fx_pose_t *r = &m->ref;
+	q32_t dx = c->target.x_mm - r->x_mm, dy = c->target.y_mm - r->y_mm;
+	q32_t dist = fx_hypot(dx, dy);
+	switch (c->stage++) {
+	case 0: {
+		if (dist < TINY_MM)
+			return STAGE_SKIP;
+		q32_t a = fx_wrap_deg(fx_atan2_deg(dy, dx) - r->th_deg);
+		if (fx_abs64(a) < 1)
+			return STAGE_SKIP;
+		seg_turn(m, a);
+		return STAGE_PIECE;
+	}
+	case 1:
+		if (dist < TINY_MM)
+			return STAGE_SKIP;
+		seg_line(m, r, c->target.x_mm, c->target.y_mm, r->th_deg);
+		return STAGE_PIECE;
+	case 2: {
+		q32_t a = fx_wrap_deg(c->target.th_deg - r->th_deg);
+		if (!c->has_heading || fx_abs64(a) < 1)
+			return STAGE_SKIP;
+		seg_turn(m, a);
+		return STAGE_PIECE;
+	}
+	default:
+		return STAGE_DONE;
+	}
+}
+
+/* A cruise waypoint: its line's start becomes known (and the corner into
+ * it is planned) when it runs first; it turns to face along its line
+ * unless it arrives out of a corner, then runs its line. */
+static stage_t cruise_stage(motion_t *m, motion_cmd_t *c)
+{
+	const fx_pose_t *r = &m->ref;
+	switch (c->stage++) {
+	case 0: {
+		if (!c->start_known) {
+			motion_cruise_set_start(c, r->x_mm, r->y_mm);
+			if (m->q_count < 2 || !motion_plan_corner(m, 0))
+				motion_backward_pass(m);
+		}
+		if (m->v > 0)
+			return STAGE_SKIP; /* arriving out of a corner, already aligned */
+		q32_t dx = c->target.x_mm - r->x_mm, dy = c->target.y_mm - r->y_mm;
+		if (fx_hypot(dx, dy) < TINY_MM)
+			return STAGE_SKIP;
+		q32_t a = fx_wrap_deg(fx_atan2_deg(dy, dx) - r->th_deg);
+		if (fx_abs64(a) < 1)
+			return STAGE_SKIP;
+		seg_turn(m, a);
+		return STAGE_PIECE;
+	}
+	case 1:
+		if (c->len_mm < TINY_MM)
+			return STAGE_SKIP;
+		cruise_line(m, c);
+		return STAGE_PIECE;
+	default:
+		/* Its corner, if any, began as its line ended
+		 * (path_tick): nothing is left. */
+		return STAGE_DONE;
+	}
+}
+
+static stage_t command_stage(motion_t *m, motion_cmd_t *c)
+{
+	switch (c->kind) {
+	case MCMD_FORWARD:
+		return forward_stage(m, c);
+	case MCMD_TURN:
+		return turn_stage(m, c);
+	case MCMD_ARC:
+		return arc_stage(m, c);
+	case MCMD_LINE:
+		if (m->p.kin == MOTION_KIN_OMNI)
+			return line_stage_omni(m, c);
+		return line_stage_diff(m, c);
+	case MCMD_CRUISE:
+		return cruise_stage(m, c);
+	default:
+		return STAGE_DONE;
+	}
+}
+
 /* Sets up the next piece of the head command; false when it is finished. */
 static bool next_piece(motion_t *m)
 {
 	motion_cmd_t *c = q_at(m, 0);
-	fx_pose_t *r = &m->ref;
-	for (;;) {
-		switch (c->kind) {
-		case MCMD_FORWARD:
-			if (c->stage++ > 0)
-				return false;
-			seg_line(m, r, c->target.x_mm, c->target.y_mm, r->th_deg);
-			if (m->seg.len < TINY_MM)
-				continue;
-			return true;
-		case MCMD_TURN:
-			if (c->stage++ > 0)
-				return false;
-			if (fx_abs64(c->angle_deg) < 1)
-				continue;
-			seg_turn(m, c->angle_deg);
-			return true;
-		case MCMD_ARC: {
-			if (c->stage++ > 0)
-				return false;
-			seg_t *g = &m->seg;
-			*g = (seg_t){0};
-			g->kind = SEG_ARC;
-			g->p0 = *r;
-			g->cx = c->cx_mm;
-			g->cy = c->cy_mm;
-			g->dir = c->angle_deg < 0 ? -1 : 1;
-			g->len = fx_abs64(c->angle_deg);
-			g->p_end = c->target;
-			q32_t radius = fx_hypot(r->x_mm - c->cx_mm, r->y_mm - c->cy_mm);
-			g->arc_k = fx_mul(radius, DEG_TO_RAD_Q32);
-			/* Rigid rotation about the centre c (body frame): the body
-			 * moves at w x (-c) = w (c.y, -c.x). */
-			g->arc_kx = fx_mul(c->sy_mm, DEG_TO_RAD_Q32);
-			g->arc_ky = -fx_mul(c->sx_mm, DEG_TO_RAD_Q32);
-			if (g->len < 1)
-				continue;
-			return true;
+	stage_t st;
+	do
+		st = command_stage(m, c);
+	while (st == STAGE_SKIP);
+	return st == STAGE_PIECE;
+}
+
+/* What a piece allows of a translational limit t (mm per tick, or per
+ * tick squared) and a rotational limit r (deg alike), for the set limits
+ * and the hard ones: speeds and accelerations take the same form. A turn
+ * has r; an arc the lower of r and t over its mm per degree; a line whose
+ * heading turns with the path (omni) the lower of t and r times its mm per
+ * degree, kept 1/4096 below as omni_k is rounded; any other line t. A
+ * corner's acceleration is the lower of t and half of r times its mm per
+ * degree, the other half is the curvature change (traj.h,
+ * traj_corner_rates); its speed cap is planned (corner_vrot). */
+static inline q32_t piece_limit(const seg_t *g, q32_t t, q32_t r)
+{
+	switch (g->kind) {
+	case SEG_TURN:
+		return r;
+	case SEG_ARC:
+		return fx_min64(r, fx_div(t, g->arc_k));
+	case SEG_LINE:
+		if (g->dth != 0) {
+			q32_t rk = fx_mul(r, g->omni_k);
+			return fx_min64(t, rk - (rk >> 12));
 		}
-		case MCMD_LINE: {
-			q32_t dx = c->target.x_mm - r->x_mm, dy = c->target.y_mm - r->y_mm;
-			q32_t dist = fx_hypot(dx, dy);
-			if (m->p.kin == MOTION_KIN_OMNI) {
-				/* Translation and rotation together, unless the move is
-				 * mostly rotation (under 1 mm per degree): then the
-				 * heading would ride on a tiny path ratio, so turn
-				 * first and then translate. */
-				q32_t a = fx_wrap_deg(c->target.th_deg - r->th_deg);
-				bool split = fx_abs64(a) > FX_ONE / 1000 && dist < fx_abs64(a);
-				switch (c->stage++) {
-				case 0:
-					if (dist >= TINY_MM && !split) {
-						c->stage = 2;
-						seg_line(m, r, c->target.x_mm, c->target.y_mm,
-							 c->target.th_deg);
-						return true;
-					}
-					if (fx_abs64(a) < 1)
-						continue;
-					seg_turn(m, a);
-					return true;
-				case 1:
-					if (dist < TINY_MM)
-						continue;
-					seg_line(m, r, c->target.x_mm, c->target.y_mm, r->th_deg);
-					return true;
-				default:
-					return false;
-				}
-			}
-			switch (c->stage++) {
-			case 0: {
-				if (dist < TINY_MM)
-					continue;
-				q32_t a = fx_wrap_deg(fx_atan2_deg(dy, dx) - r->th_deg);
-				if (fx_abs64(a) < 1)
-					continue;
-				seg_turn(m, a);
-				return true;
-			}
-			case 1:
-				if (dist < TINY_MM)
-					continue;
-				seg_line(m, r, c->target.x_mm, c->target.y_mm, r->th_deg);
-				return true;
-			case 2: {
-				q32_t a = fx_wrap_deg(c->target.th_deg - r->th_deg);
-				if (!c->has_heading || fx_abs64(a) < 1)
-					continue;
-				seg_turn(m, a);
-				return true;
-			}
-			default:
-				return false;
-			}
-		}
-		case MCMD_CRUISE:
-			switch (c->stage++) {
-			case 0: {
-				if (!c->start_known) {
-					motion_cruise_set_start(c, r->x_mm, r->y_mm);
-					if (m->q_count < 2 || !motion_plan_corner(m, 0))
-						motion_backward_pass(m);
-				}
-				if (m->v > 0)
-					continue; /* arriving out of a corner, already aligned */
-				q32_t dx = c->target.x_mm - r->x_mm, dy = c->target.y_mm - r->y_mm;
-				if (fx_hypot(dx, dy) < TINY_MM)
-					continue;
-				q32_t a = fx_wrap_deg(fx_atan2_deg(dy, dx) - r->th_deg);
-				if (fx_abs64(a) < 1)
-					continue;
-				seg_turn(m, a);
-				return true;
-			}
-			case 1:
-				if (c->len_mm < TINY_MM)
-					continue;
-				cruise_line(m, c);
-				return true;
-			default:
-				/* Its corner, if any, began as its line ended
-				 * (path_tick): nothing is left. */
-				return false;
-			}
-		default:
-			return false;
-		}
+		return t;
+	case SEG_CORNER:
+		return fx_min64(t, fx_mul(r, g->corner.k_mm_deg) / 2);
+	default:
+		return t;
 	}
 }
 
-/* Speed cap and acceleration of the active piece. */
+/* Speed cap and acceleration of the active piece; a corner's are those the
+ * backward pass planned with (corner_a_pt2: piece_limit at the set rates). */
 static void piece_limits(const motion_t *m, q32_t *vmax, q32_t *a)
 {
 	const seg_t *g = &m->seg;
 	switch (g->kind) {
 	case SEG_TURN:
-		*vmax = m->v_r_pt;
-		*a = m->a_r_pt2;
-		break;
-	case SEG_ARC: {
-		q32_t vt = fx_div(vt_eff(m), g->arc_k), at = fx_div(m->a_t_pt2, g->arc_k);
-		*vmax = fx_min64(m->v_r_pt, vt);
-		*a = fx_min64(m->a_r_pt2, at);
-		break;
-	}
+	case SEG_ARC:
 	case SEG_LINE:
-		*vmax = vt_eff(m);
-		*a = m->a_t_pt2;
-		if (g->dth != 0) {
-			/* omni_k is rounded: keep 1/4096 below the rotation limits. */
-			q32_t vr = fx_mul(m->v_r_pt, g->omni_k), ar = fx_mul(m->a_r_pt2, g->omni_k);
-			*vmax = fx_min64(*vmax, vr - (vr >> 12));
-			*a = fx_min64(*a, ar - (ar >> 12));
-		}
+		*vmax = piece_limit(g, vt_eff(m), m->v_r_pt);
+		*a = piece_limit(g, m->a_t_pt2, m->a_r_pt2);
 		break;
 	case SEG_CORNER: {
 		const motion_cmd_t *c = q_at((motion_t *)m, 0);
@@ -377,17 +440,104 @@ static bool blends_onward(motion_t *m, uint8_t finished_kind)
 	return finished_kind == SEG_LINE || finished_kind == SEG_CORNER;
 }
 
+/* A stop came to rest: the commands it braked through are discarded. */
+static void stop_done(motion_t *m)
+{
+	m->stopping = false;
+	while (m->stop_drop)
+		pop(m);
+	m->seg.kind = SEG_NONE;
+	m->mode = m->q_count ? MODE_PATH : MODE_IDLE;
+}
+
+/* The three parts of path_tick below are inline by force: left to the
+ * compiler (which inlines them too), the cruise's dearest tick cost 13
+ * more instructions, 1,001 of its 1,000 (tools/bench/tickcost.sh). */
+
+/* The active piece's speed this tick: the profile's step at the piece's
+ * limits (computed once per piece); braking, at most the acceleration
+ * limit below the present speed. */
+static inline __attribute__((always_inline)) q32_t piece_speed(motion_t *m, bool braking)
+{
+	if (!m->lim_ok) {
+		piece_limits(m, &m->lim_vmax, &m->lim_a);
+		m->lim_extra = piece_horizon_extra(m);
+		m->lim_cruise = -1;
+		m->lim_n = -1;
+		m->lim_ok = true;
+	}
+	q32_t d = m->seg.len - m->seg.s + m->lim_extra;
+	q32_t u;
+	if (m->v == m->lim_vmax) {
+		/* At the cap with room to stop from it, traj_step keeps
+		 * the speed: skip it (its braking distance divides). */
+		if (m->lim_cruise < 0)
+			m->lim_cruise = m->lim_vmax + traj_brake_dist(m->lim_vmax, m->lim_a);
+		u = d >= m->lim_cruise ? m->v
+				       : traj_step_near(m->v, d, m->lim_vmax, m->lim_a, &m->lim_n);
+	} else {
+		u = traj_step_near(m->v, d, m->lim_vmax, m->lim_a, &m->lim_n);
+	}
+	if (braking) {
+		/* Stop at the acceleration limit, along the path. */
+		q32_t amax = piece_limit(&m->seg, m->amax_t_pt2, m->amax_r_pt2);
+		u = fx_min64(u, fx_max64(m->v - amax, 0));
+	}
+	return u;
+}
+
+/* Advances the active piece by step, short of its end; true when that
+ * gave the tick's twist (a turn's; an arc's exact rates, its pose being
+ * analytic). */
+static inline __attribute__((always_inline)) bool piece_move(motion_t *m, q32_t step,
+							     fx_twist_t *out)
+{
+	piece_advance(m, m->seg.s + step);
+	m->seg.s += step;
+	if (m->seg.kind == SEG_TURN && m->seg.s != step) {
+		*out = (fx_twist_t){.w_pt = m->seg.dir * step};
+		return true;
+	}
+	if (m->seg.kind == SEG_ARC) {
+		q32_t w = m->seg.dir * step;
+		out->vx_pt = fx_mul(w, m->seg.arc_kx);
+		out->vy_pt = fx_mul(w, m->seg.arc_ky);
+		out->w_pt = w;
+		return true;
+	}
+	return false;
+}
+
+/* The active piece is complete: land exactly on its end (a corner's
+ * integration arrives within nanometres of its planned exit). True when
+ * the path flows on into the next piece; false at a stop, whose last step
+ * covered the exact remainder (< a). */
+static inline __attribute__((always_inline)) bool piece_finish(motion_t *m)
+{
+	m->ref = m->seg.p_end;
+	uint8_t kind = m->seg.kind;
+	m->seg.kind = SEG_NONE;
+	if (!blends_onward(m, kind)) {
+		m->v = 0;
+		m->rest_tick = true;
+		return false;
+	}
+	if (kind == SEG_LINE && q_at(m, 0)->corner.lh_mm != 0) {
+		/* Into the corner here, not through next_piece: this is
+		 * the dearest tick of a cruise (a collinear pass has no
+		 * corner piece). */
+		corner_piece(m, q_at(m, 0));
+		limits_changed(m);
+	}
+	return true;
+}
+
 static void path_tick(motion_t *m, fx_twist_t *out)
 {
 	bool braking = m->paused || m->stopping;
 	if (braking && m->v == 0) {
-		if (m->stopping) {
-			m->stopping = false;
-			while (m->stop_drop)
-				pop(m);
-			m->seg.kind = SEG_NONE;
-			m->mode = m->q_count ? MODE_PATH : MODE_IDLE;
-		}
+		if (m->stopping)
+			stop_done(m);
 		*out = (fx_twist_t){0};
 		return;
 	}
@@ -430,50 +580,8 @@ static void path_tick(motion_t *m, fx_twist_t *out)
 			}
 		}
 		if (budget < 0) {
-			if (!m->lim_ok) {
-				piece_limits(m, &m->lim_vmax, &m->lim_a);
-				m->lim_extra = piece_horizon_extra(m);
-				m->lim_cruise = -1;
-				m->lim_n = -1;
-				m->lim_ok = true;
-			}
-			q32_t d = m->seg.len - m->seg.s + m->lim_extra;
-			q32_t u;
-			if (m->v == m->lim_vmax) {
-				/* At the cap with room to stop from it, traj_step keeps
-				 * the speed: skip it (its braking distance divides). */
-				if (m->lim_cruise < 0)
-					m->lim_cruise =
-					    m->lim_vmax + traj_brake_dist(m->lim_vmax, m->lim_a);
-				u = d >= m->lim_cruise
-					? m->v
-					: traj_step_near(m->v, d, m->lim_vmax, m->lim_a, &m->lim_n);
-			} else {
-				u = traj_step_near(m->v, d, m->lim_vmax, m->lim_a, &m->lim_n);
-			}
-			if (braking) {
-				/* Stop at the acceleration limit, along the path. */
-				q32_t amax = m->amax_t_pt2;
-				if (m->seg.kind == SEG_TURN)
-					amax = m->amax_r_pt2;
-				else if (m->seg.kind == SEG_ARC)
-					amax = fx_min64(m->amax_r_pt2,
-							fx_div(m->amax_t_pt2, m->seg.arc_k));
-				else if (m->seg.kind == SEG_LINE && m->seg.dth != 0)
-				/* Heading turns with the path: both limits bind. */
-				{
-					q32_t ar = fx_mul(m->amax_r_pt2, m->seg.omni_k);
-					amax = fx_min64(amax, ar - (ar >> 12));
-				} else if (m->seg.kind == SEG_CORNER)
-					/* Half the rotational limit for braking, the other
-					 * half is the curvature change (traj.h). */
-					amax = fx_min64(
-					    amax,
-					    fx_mul(m->amax_r_pt2, m->seg.corner.k_mm_deg) / 2);
-				u = fx_min64(u, fx_max64(m->v - amax, 0));
-			}
-			budget = u;
-			m->v = u;
+			budget = piece_speed(m, braking);
+			m->v = budget;
 		}
 		q32_t rem = m->seg.len - m->seg.s;
 		along = along &&
@@ -481,44 +589,14 @@ static void path_tick(motion_t *m, fx_twist_t *out)
 		if (dir == 0)
 			dir = m->seg.dir;
 		if (budget < rem) {
-			piece_advance(m, m->seg.s + budget);
-			m->seg.s += budget;
 			moved += budget;
-			if (m->seg.kind == SEG_TURN && m->seg.s != budget) {
-				*out = (fx_twist_t){.w_pt = m->seg.dir * budget};
+			if (piece_move(m, budget, out))
 				return;
-			}
-			if (m->seg.kind == SEG_ARC) {
-				/* Exact rates; the pose itself is analytic. */
-				q32_t w = m->seg.dir * budget;
-				out->vx_pt = fx_mul(w, m->seg.arc_kx);
-				out->vy_pt = fx_mul(w, m->seg.arc_ky);
-				out->w_pt = w;
-				return;
-			}
 			break;
 		}
-		/* Piece complete: land exactly on its end (a corner's integration
-		 * arrives within nanometres of its planned exit). */
-		m->ref = m->seg.p_end;
 		budget -= rem;
 		moved += rem;
-		uint8_t kind = m->seg.kind;
-		m->seg.kind = SEG_NONE;
-		if (!blends_onward(m, kind)) {
-			/* A stop: the last step covered the exact remainder (< a). */
-			m->v = 0;
-			m->rest_tick = true;
-			break;
-		}
-		if (kind == SEG_LINE && q_at(m, 0)->corner.lh_mm != 0) {
-			/* Into the corner here, not through next_piece: this is
-			 * the dearest tick of a cruise (a collinear pass has no
-			 * corner piece). */
-			corner_piece(m, q_at(m, 0));
-			limits_changed(m);
-		}
-		if (budget == 0)
+		if (!piece_finish(m) || budget == 0)
 			break;
 	}
 	if (along && m->p.kin == MOTION_KIN_DIFF) {
