@@ -9,6 +9,8 @@
 #   clang-format every tracked C file follows .clang-format (`make format` fixes)
 #   client      vehiclectl links no firmware object (nm): the client library
 #               uses the command table and the encodings, never the unit
+#   fnsize      no function of firmware/ over 80 body lines or nested deeper
+#               than 4 (tools/lint/fnsize.py)
 # tests/ are excluded from the analysers (cmocka macros); they build with
 # -Wall -Wextra -Werror.
 # Also in the set: hal/linux/ (the vehicle-fw backends, mk/linux.mk), its
@@ -20,9 +22,16 @@ LINT_SRC := $(FW_SRC) $(PROTO_SRC) $(HOST_SRC) $(SIM_SRC) $(wildcard host_sim/*_
 LINT_DEFS := -std=c11 -I. -D_GNU_SOURCE -I/usr/include/libevdev-1.0
 CLANG ?= clang
 
-.PHONY: lint lint-cppcheck lint-tidy lint-warnings lint-format lint-client
+.PHONY: lint lint-cppcheck lint-tidy lint-warnings lint-format lint-client lint-fnsize
 
-lint: lint-format lint-cppcheck lint-warnings lint-tidy lint-client
+lint: lint-format lint-cppcheck lint-warnings lint-tidy lint-client lint-fnsize
+
+# config.c is left out while its check and defaults become a table.
+FNSIZE_SRC := $(filter-out firmware/config.c,$(FW_SRC)) $(wildcard firmware/*.h)
+
+lint-fnsize:
+	@echo "  FNSIZE  firmware: 80 body lines, nesting depth 4"
+	$(Q)python3 tools/lint/fnsize.py $(FNSIZE_SRC)
 
 # Every global symbol firmware/ defines, looked for in vehiclectl.
 lint-client: $(BUILD)/vehiclectl $(FW_LIB)
