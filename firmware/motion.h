@@ -129,7 +129,8 @@ typedef struct {
 	seg_t seg; /* active piece (mode PATH) */
 	q32_t v;   /* speed along the active piece, per tick */
 	/* The active piece's speed cap, acceleration and stopping distance
-	 * beyond its end, valid while lim_ok (motion.c drops it on any change). */
+	 * beyond its end, valid while lim_ok (limits_changed, motion_priv.h, drops
+	 * it on any change). */
 	q32_t lim_vmax, lim_a, lim_extra;
 	q32_t lim_cruise; /* lim_vmax plus its braking distance (-1: not yet) */
 	int64_t lim_n;	  /* the profile's last braking step count (traj_step_near) */

@@ -79,22 +79,10 @@ static uint32_t ms_to_ticks(uint32_t ms, uint32_t tick_hz)
 	return t ? t : 1u;
 }
 
-int vehicle_init(vehicle_t *v, const vs_config_t *cfg, const vs_hal_t *hal, const char **bad_field)
+/* The motion engine at the configured limits and defaults; returns its
+ * kinematics. */
+static motion_kin_t init_motion(vehicle_t *v, const vs_config_t *cfg)
 {
-	int rc = vs_config_check(cfg, bad_field);
-	if (rc != 0)
-		return rc;
-	if (!hal_complete(hal, cfg)) {
-		if (bad_field)
-			*bad_field = "hal";
-		return -4;
-	}
-
-	*v = (vehicle_t){0};
-	v->cfg = *cfg;
-	v->hal = *hal;
-	v->naxes = vs_config_axes(cfg);
-
 	motion_params_t mp = {
 	    .tick_hz = cfg->tick_hz,
 	    .kin = cfg->kinematics == VS_KIN_OMNI ? MOTION_KIN_OMNI : MOTION_KIN_DIFF,
@@ -110,7 +98,13 @@ int vehicle_init(vehicle_t *v, const vs_config_t *cfg, const vs_hal_t *hal, cons
 	motion_set_accel(&v->motion, to_q32(cfg->acc_default_t_mm_s2),
 			 to_q32(cfg->acc_default_r_deg_s2));
 	motion_set_jog_timeout_ms(&v->motion, cfg->jog_timeout_default_ms);
+	return mp.kin;
+}
 
+/* The wheel loop and odometry; returns the encoder counts per mm, which
+ * the supervision limits are counted in. */
+static double init_kin(vehicle_t *v, const vs_config_t *cfg, motion_kin_t kin)
+{
 	double circumference = PI_D * cfg->wheel_diameter_mm;
 	double counts_per_mm = (double)cfg->encoder_counts_per_rev / circumference;
 	double half = cfg->kinematics == VS_KIN_OMNI
@@ -118,7 +112,7 @@ int vehicle_init(vehicle_t *v, const vs_config_t *cfg, const vs_hal_t *hal, cons
 			  : cfg->track_width_mm / 2.0;
 	double mm_per_deg = half * PI_D / 180.0;
 	kin_params_t kp = {
-	    .kin = (uint8_t)mp.kin,
+	    .kin = (uint8_t)kin,
 	    .n = v->naxes,
 	    .tick_hz = cfg->tick_hz,
 	    .counts_per_mm = to_q32(counts_per_mm),
@@ -130,11 +124,12 @@ int vehicle_init(vehicle_t *v, const vs_config_t *cfg, const vs_hal_t *hal, cons
 		kp.lag_q16[i] =
 		    (int64_t)(LAG_TICKS(cfg->drive_lag_ms[i], cfg->tick_hz) * 65536.0 + 0.5);
 	kin_init(&v->kin, &kp);
+	return counts_per_mm;
+}
 
-	v->vel_set = (vs_velocity_t){cfg->vel_default_t_mm_s, cfg->vel_default_r_deg_s};
-	v->acc_set = (vs_velocity_t){cfg->acc_default_t_mm_s2, cfg->acc_default_r_deg_s2};
-	v->jog_timeout_ms = (int16_t)cfg->jog_timeout_default_ms;
-
+/* Supervision limits in ticks, counts and millivolts. */
+static void init_supervision(vehicle_t *v, const vs_config_t *cfg, double counts_per_mm)
+{
 	v->period_us = 1000000u / cfg->tick_hz;
 	v->drive_timeout_ticks = ms_to_ticks(cfg->drive_timeout_ms, cfg->tick_hz);
 	v->loop_late_us = cfg->loop_late_ms * 1000u;
@@ -156,6 +151,28 @@ int vehicle_init(vehicle_t *v, const vs_config_t *cfg, const vs_hal_t *hal, cons
 	v->battery_low_armed = true;
 	v->caution_vel_t = to_q32(cfg->caution_vel_t_mm_s);
 	v->joystick_deadband_q15 = (int32_t)(cfg->joystick_deadband * 32767.0 + 0.5);
+}
+
+int vehicle_init(vehicle_t *v, const vs_config_t *cfg, const vs_hal_t *hal, const char **bad_field)
+{
+	int rc = vs_config_check(cfg, bad_field);
+	if (rc != 0)
+		return rc;
+	if (!hal_complete(hal, cfg)) {
+		if (bad_field)
+			*bad_field = "hal";
+		return -4;
+	}
+
+	*v = (vehicle_t){0};
+	v->cfg = *cfg;
+	v->hal = *hal;
+	v->naxes = vs_config_axes(cfg);
+	double counts_per_mm = init_kin(v, cfg, init_motion(v, cfg));
+	v->vel_set = (vs_velocity_t){cfg->vel_default_t_mm_s, cfg->vel_default_r_deg_s};
+	v->acc_set = (vs_velocity_t){cfg->acc_default_t_mm_s2, cfg->acc_default_r_deg_s2};
+	v->jog_timeout_ms = (int16_t)cfg->jog_timeout_default_ms;
+	init_supervision(v, cfg, counts_per_mm);
 
 	/* Start Unpowered in fact, not only in name. */
 	for (uint8_t i = 0; i < v->naxes; i++)

@@ -10,6 +10,8 @@
 #   client      vehiclectl links no firmware object (nm): the client library
 #               uses the command table and the encodings, never the unit
 #   includes    the folder rules of docs/architecture.md (tools/lint/includes.py)
+#   fnsize      no function of firmware/ over 80 body lines or nested deeper
+#               than 4 (tools/lint/fnsize.py)
 # Every tracked C file is in one of the sets below:
 #   LINT_SRC       host code, all checks: firmware/, proto/, hal/posix/,
 #                  hal/linux/, host_sim/ (devices too), the tools and
@@ -32,9 +34,9 @@ LINT_MCU_DEFS := -std=c11 -I. --target=arm-none-eabi -mcpu=cortex-m4 -mthumb -ff
 	-DMOTION_QUEUE_LEN=16 -isystem /usr/lib/arm-none-eabi/include
 CLANG ?= clang
 
-.PHONY: lint lint-cppcheck lint-tidy lint-warnings lint-format lint-client lint-includes lint-sets
+.PHONY: lint lint-cppcheck lint-tidy lint-warnings lint-format lint-client lint-includes lint-sets lint-fnsize
 
-lint: lint-sets lint-format lint-includes lint-cppcheck lint-warnings lint-tidy lint-client
+lint: lint-sets lint-format lint-includes lint-cppcheck lint-warnings lint-tidy lint-client lint-fnsize
 
 # A C file that no set names fails: a new folder cannot slip past lint.
 lint-sets:
@@ -50,6 +52,13 @@ lint-includes:
 	@echo "  INCLUDES folder rules"
 	$(Q)python3 tools/lint/includes.py --self-test
 	$(Q)python3 tools/lint/includes.py .
+
+# config.c is left out while its check and defaults become a table.
+FNSIZE_SRC := $(filter-out firmware/config.c,$(FW_SRC)) $(wildcard firmware/*.h)
+
+lint-fnsize:
+	@echo "  FNSIZE  firmware: 80 body lines, nesting depth 4"
+	$(Q)python3 tools/lint/fnsize.py $(FNSIZE_SRC)
 
 # Every global symbol firmware/ defines, looked for in vehiclectl.
 lint-client: $(BUILD)/vehiclectl $(FW_LIB)

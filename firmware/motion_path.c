@@ -1,0 +1,643 @@
+/* Motion engine: the tick. motion_tick dispatches on the mode; the path
+ * mode executes the queued commands piece by piece (a turn, a line, an arc,
+ * a cruise corner) on the profiles of traj.c. */
+#include "motion_priv.h"
+
+#include <stddef.h>
+
+#define DEG_TO_RAD_Q32 ((q32_t)74961321) /* pi / 180 */
+/* Heading change below which a corner step turns its entry direction to
+ * first order (0.002 deg: 3.5e-5 rad, squared half below 2^-30). */
+#define CORNER_SMALL_DEG ((q32_t)8589935)
+
+static void seg_line(motion_t *m, const fx_pose_t *from, q32_t tx, q32_t ty, q32_t th_end)
+{
+	seg_t *g = &m->seg;
+	*g = (seg_t){0};
+	g->kind = SEG_LINE;
+	g->p0 = *from;
+	g->len = motion_unit_dir(tx - from->x_mm, ty - from->y_mm, &g->ux, &g->uy);
+	g->p_end.x_mm = tx;
+	g->p_end.y_mm = ty;
+	/* Travel sign relative to the heading (moveForward may go backward). */
+	int32_t hs, hc;
+	fx_sincos_bam(fx_deg_to_bam(from->th_deg), &hs, &hc);
+	int64_t dot = (int64_t)g->ux * hc + (int64_t)g->uy * hs;
+	g->dir = dot < 0 ? -1 : 1;
+	g->dth = fx_wrap_deg(th_end - from->th_deg);
+	g->p_end.th_deg = fx_wrap_deg(from->th_deg + g->dth);
+	if (g->dth != 0)
+		g->omni_k = fx_div(g->len, fx_abs64(g->dth));
+}
+
+static void seg_turn(motion_t *m, q32_t angle)
+{
+	seg_t *g = &m->seg;
+	*g = (seg_t){0};
+	g->kind = SEG_TURN;
+	g->p0 = m->ref;
+	g->dir = angle < 0 ? -1 : 1;
+	g->len = fx_abs64(angle);
+	g->p_end = m->ref;
+	g->p_end.th_deg = fx_wrap_deg(m->ref.th_deg + angle);
+}
+
+/* The straight part of cruise command c, from the reference (its start, or
+ * the previous corner's exit) along the direction planned when it was
+ * queued, to its corner's entry or its waypoint. The length is measured
+ * along that direction: no square root or division in the tick that blends
+ * into it. The heading is already along the line (turn or corner before). */
+static void cruise_line(motion_t *m, const motion_cmd_t *c)
+{
+	const fx_pose_t *r = &m->ref;
+	/* Only the fields a line or the corner after it reads are set: clearing
+	 * the whole piece costs more than the rest of its setup. */
+	seg_t *g = &m->seg;
+	g->kind = SEG_LINE;
+	g->dir = 1;
+	g->s = 0;
+	g->p0 = *r;
+	g->ux = c->ux;
+	g->uy = c->uy;
+	g->dth = 0;
+	g->cx = g->cy = 0;
+	q32_t t = c->has_corner ? c->corner.t_mm : 0;
+	g->p_end.x_mm = c->target.x_mm - fx_mul_q30(t, c->ux);
+	g->p_end.y_mm = c->target.y_mm - fx_mul_q30(t, c->uy);
+	g->p_end.th_deg = r->th_deg;
+	q32_t len =
+	    fx_mul_q30(g->p_end.x_mm - r->x_mm, c->ux) + fx_mul_q30(g->p_end.y_mm - r->y_mm, c->uy);
+	g->len = len > 0 ? len : 0;
+}
+
+/* The corner of cruise command c, from the reference: the piece still holds
+ * c's line (cruise_line), so only the corner's own fields are set. */
+static void corner_piece(motion_t *m, const motion_cmd_t *c)
+{
+	seg_t *g = &m->seg;
+	g->kind = SEG_CORNER;
+	g->s = 0;
+	g->p0 = m->ref;
+	g->h = 0;
+	g->corner = c->corner;
+	g->len = 2 * c->corner.lh_mm;
+	g->p_end.x_mm = c->exit_x_mm;
+	g->p_end.y_mm = c->exit_y_mm;
+	g->p_end.th_deg = fx_wrap_deg(m->ref.th_deg + c->corner.phi_deg);
+}
+
+/* What one stage of a command did: set up a piece, found nothing to do
+ * (its next stage runs), or found the command finished. */
+typedef enum { STAGE_DONE, STAGE_PIECE, STAGE_SKIP } stage_t;
+
+static stage_t forward_stage(motion_t *m, motion_cmd_t *c)
+{
+	const fx_pose_t *r = &m->ref;
+	if (c->stage++ > 0)
+		return STAGE_DONE;
+	seg_line(m, r, c->target.x_mm, c->target.y_mm, r->th_deg);
+	if (m->seg.len < TINY_MM)
+		return STAGE_SKIP;
+	return STAGE_PIECE;
+}
+
+static stage_t turn_stage(motion_t *m, motion_cmd_t *c)
+{
+	if (c->stage++ > 0)
+		return STAGE_DONE;
+	if (fx_abs64(c->angle_deg) < 1)
+		return STAGE_SKIP;
+	seg_turn(m, c->angle_deg);
+	return STAGE_PIECE;
+}
+
+static stage_t arc_stage(motion_t *m, motion_cmd_t *c)
+{
+	const fx_pose_t *r = &m->ref;
+	if (c->stage++ > 0)
+		return STAGE_DONE;
+	seg_t *g = &m->seg;
+	*g = (seg_t){0};
+	g->kind = SEG_ARC;
+	g->p0 = *r;
+	g->cx = c->cx_mm;
+	g->cy = c->cy_mm;
+	g->dir = c->angle_deg < 0 ? -1 : 1;
+	g->len = fx_abs64(c->angle_deg);
+	g->p_end = c->target;
+	q32_t radius = fx_hypot(r->x_mm - c->cx_mm, r->y_mm - c->cy_mm);
+	g->arc_k = fx_mul(radius, DEG_TO_RAD_Q32);
+	/* Rigid rotation about the centre c (body frame): the body
+	 * moves at w x (-c) = w (c.y, -c.x). */
+	g->arc_kx = fx_mul(c->sy_mm, DEG_TO_RAD_Q32);
+	g->arc_ky = -fx_mul(c->sx_mm, DEG_TO_RAD_Q32);
+	if (g->len < 1)
+		return STAGE_SKIP;
+	return STAGE_PIECE;
+}
+
+/* A line to a pose, omni base: translation and rotation together, unless
+ * the move is mostly rotation (under 1 mm per degree): then the heading
+ * would ride on a tiny path ratio, so turn first and then translate. */
+static stage_t line_stage_omni(motion_t *m, motion_cmd_t *c)
+{
+	const fx_pose_t *r = &m->ref;
+	q32_t dx = c->target.x_mm - r->x_mm, dy = c->target.y_mm - r->y_mm;
+	q32_t dist = fx_hypot(dx, dy);
+	q32_t a = fx_wrap_deg(c->target.th_deg - r->th_deg);
+	bool split = fx_abs64(a) > FX_ONE / 1000 && dist < fx_abs64(a);
+	switch (c->stage++) {
+	case 0:
+		if (dist >= TINY_MM && !split) {
+			c->stage = 2;
+			seg_line(m, r, c->target.x_mm, c->target.y_mm, c->target.th_deg);
+			return STAGE_PIECE;
+		}
+		if (fx_abs64(a) < 1)
+			return STAGE_SKIP;
+		seg_turn(m, a);
+		return STAGE_PIECE;
+	case 1:
+		if (dist < TINY_MM)
+			return STAGE_SKIP;
+		seg_line(m, r, c->target.x_mm, c->target.y_mm, r->th_deg);
+		return STAGE_PIECE;
+	default:
+		return STAGE_DONE;
+	}
+}
+
+/* A line to a pose, differential base: face the target, drive to it, turn
+ * to the final heading. */
+static stage_t line_stage_diff(motion_t *m, motion_cmd_t *c)
+{
+	const fx_pose_t *r = &m->ref;
+	q32_t dx = c->target.x_mm - r->x_mm, dy = c->target.y_mm - r->y_mm;
+	q32_t dist = fx_hypot(dx, dy);
+	switch (c->stage++) {
+	case 0: {
+		if (dist < TINY_MM)
+			return STAGE_SKIP;
+		q32_t a = fx_wrap_deg(fx_atan2_deg(dy, dx) - r->th_deg);
+		if (fx_abs64(a) < 1)
+			return STAGE_SKIP;
+		seg_turn(m, a);
+		return STAGE_PIECE;
+	}
+	case 1:
+		if (dist < TINY_MM)
+			return STAGE_SKIP;
+		seg_line(m, r, c->target.x_mm, c->target.y_mm, r->th_deg);
+		return STAGE_PIECE;
+	case 2: {
+		q32_t a = fx_wrap_deg(c->target.th_deg - r->th_deg);
+		if (!c->has_heading || fx_abs64(a) < 1)
+			return STAGE_SKIP;
+		seg_turn(m, a);
+		return STAGE_PIECE;
+	}
+	default:
+		return STAGE_DONE;
+	}
+}
+
+/* A cruise waypoint: its line's start becomes known (and the corner into
+ * it is planned) when it runs first; it turns to face along its line
+ * unless it arrives out of a corner, then runs its line. */
+static stage_t cruise_stage(motion_t *m, motion_cmd_t *c)
+{
+	const fx_pose_t *r = &m->ref;
+	switch (c->stage++) {
+	case 0: {
+		if (!c->start_known) {
+			motion_cruise_set_start(c, r->x_mm, r->y_mm);
+			if (m->q_count < 2 || !motion_plan_corner(m, 0))
+				motion_backward_pass(m);
+		}
+		if (m->v > 0)
+			return STAGE_SKIP; /* arriving out of a corner, already aligned */
+		q32_t dx = c->target.x_mm - r->x_mm, dy = c->target.y_mm - r->y_mm;
+		if (fx_hypot(dx, dy) < TINY_MM)
+			return STAGE_SKIP;
+		q32_t a = fx_wrap_deg(fx_atan2_deg(dy, dx) - r->th_deg);
+		if (fx_abs64(a) < 1)
+			return STAGE_SKIP;
+		seg_turn(m, a);
+		return STAGE_PIECE;
+	}
+	case 1:
+		if (c->len_mm < TINY_MM)
+			return STAGE_SKIP;
+		cruise_line(m, c);
+		return STAGE_PIECE;
+	default:
+		/* Its corner, if any, began as its line ended
+		 * (path_tick): nothing is left. */
+		return STAGE_DONE;
+	}
+}
+
+static stage_t command_stage(motion_t *m, motion_cmd_t *c)
+{
+	switch (c->kind) {
+	case MCMD_FORWARD:
+		return forward_stage(m, c);
+	case MCMD_TURN:
+		return turn_stage(m, c);
+	case MCMD_ARC:
+		return arc_stage(m, c);
+	case MCMD_LINE:
+		if (m->p.kin == MOTION_KIN_OMNI)
+			return line_stage_omni(m, c);
+		return line_stage_diff(m, c);
+	case MCMD_CRUISE:
+		return cruise_stage(m, c);
+	default:
+		return STAGE_DONE;
+	}
+}
+
+/* Sets up the next piece of the head command; false when it is finished. */
+static bool next_piece(motion_t *m)
+{
+	motion_cmd_t *c = q_at(m, 0);
+	stage_t st;
+	do
+		st = command_stage(m, c);
+	while (st == STAGE_SKIP);
+	return st == STAGE_PIECE;
+}
+
+/* What a piece allows of a translational limit t (mm per tick, or per
+ * tick squared) and a rotational limit r (deg alike), for the set limits
+ * and the hard ones: speeds and accelerations take the same form. A turn
+ * has r; an arc the lower of r and t over its mm per degree; a line whose
+ * heading turns with the path (omni) the lower of t and r times its mm per
+ * degree, kept 1/4096 below as omni_k is rounded; any other line t. A
+ * corner's acceleration is the lower of t and half of r times its mm per
+ * degree, the other half is the curvature change (traj.h,
+ * traj_corner_rates); its speed cap is planned (corner_vrot). */
+static inline q32_t piece_limit(const seg_t *g, q32_t t, q32_t r)
+{
+	switch (g->kind) {
+	case SEG_TURN:
+		return r;
+	case SEG_ARC:
+		return fx_min64(r, fx_div(t, g->arc_k));
+	case SEG_LINE:
+		if (g->dth != 0) {
+			q32_t rk = fx_mul(r, g->omni_k);
+			return fx_min64(t, rk - (rk >> 12));
+		}
+		return t;
+	case SEG_CORNER:
+		return fx_min64(t, fx_mul(r, g->corner.k_mm_deg) / 2);
+	default:
+		return t;
+	}
+}
+
+/* Speed cap and acceleration of the active piece; a corner's are those the
+ * backward pass planned with (corner_a_pt2: piece_limit at the set rates). */
+static void piece_limits(const motion_t *m, q32_t *vmax, q32_t *a)
+{
+	const seg_t *g = &m->seg;
+	switch (g->kind) {
+	case SEG_TURN:
+	case SEG_ARC:
+	case SEG_LINE:
+		*vmax = piece_limit(g, vt_eff(m), m->v_r_pt);
+		*a = piece_limit(g, m->a_t_pt2, m->a_r_pt2);
+		break;
+	case SEG_CORNER: {
+		const motion_cmd_t *c = q_at((motion_t *)m, 0);
+		*vmax = fx_min64(vt_eff(m), c->corner_vrot_pt);
+		*a = c->corner_a_pt2;
+		break;
+	}
+	default:
+		*vmax = 0;
+		*a = m->a_t_pt2;
+	}
+	if (*a < 1)
+		*a = 1;
+}
+
+/* Distance beyond the active piece's end that the profile may count on
+ * to stop within: a blended corner's virtual stop (traj.h). */
+static q32_t piece_horizon_extra(motion_t *m)
+{
+	const seg_t *g = &m->seg;
+	if (m->q_count == 0)
+		return 0;
+	motion_cmd_t *c = q_at(m, 0);
+	if (c->kind != MCMD_CRUISE || !c->has_corner)
+		return 0;
+	/* Both planned by the backward pass, with the rates piece_limits gives
+	 * these pieces. */
+	if (g->kind == SEG_LINE)
+		return c->line_extra_mm;
+	if (g->kind == SEG_CORNER)
+		return c->corner_extra_mm;
+	return 0;
+}
+
+/* Moves the reference pose, in place, from the progress g->s to s along
+ * the active piece (the caller then sets g->s). */
+static void piece_advance(motion_t *m, q32_t s)
+{
+	seg_t *g = &m->seg;
+	q32_t s_old = g->s;
+	fx_pose_t *out = &m->ref;
+	switch (g->kind) {
+	case SEG_LINE:
+		out->x_mm = g->p0.x_mm + fx_mul_q30(s, g->ux);
+		out->y_mm = g->p0.y_mm + fx_mul_q30(s, g->uy);
+		if (g->dth != 0) {
+			/* The fraction of the line covered, Q30: exactly 1 at its
+			 * end, so the heading arrives on dth without a final step. */
+			int32_t frac = (int32_t)(fx_div(s, g->len) >> 2);
+			out->th_deg = fx_wrap_deg(g->p0.th_deg + fx_mul_q30(g->dth, frac));
+		}
+		break;
+	case SEG_TURN:
+		out->th_deg = fx_wrap_deg(g->p0.th_deg + g->dir * s);
+		break;
+	case SEG_ARC: {
+		uint32_t b = fx_deg_to_bam(g->dir * s);
+		int32_t co, si;
+		fx_sincos_bam(b, &si, &co);
+		q32_t rx = g->p0.x_mm - g->cx, ry = g->p0.y_mm - g->cy;
+		out->x_mm = g->cx + fx_mul_q30(rx, co) - fx_mul_q30(ry, si);
+		out->y_mm = g->cy + fx_mul_q30(rx, si) + fx_mul_q30(ry, co);
+		out->th_deg = fx_wrap_deg(g->p0.th_deg + g->dir * s);
+		break;
+	}
+	case SEG_CORNER: {
+		/* Heading is exact along the clothoids; position integrates the
+		 * step at the midpoint heading. Within one clothoid the heading is
+		 * quadratic in s (h'' = +-phi / Lh^2), so the midpoint's is the
+		 * mean of the ends minus h'' ds^2 / 8: one evaluation a step. The
+		 * step starts at the progress g->s, whose heading is g->h. */
+		q32_t ds = s - s_old;
+		q32_t lh = g->corner.lh_mm;
+		q32_t h1 = traj_corner_heading(&g->corner, s);
+		q32_t hm;
+		if (s_old == 0 && s <= lh) {
+			/* The step in from the line: h(s / 2) = h1 / 4 exactly. */
+			hm = h1 / 4;
+		} else if (s <= lh || s_old >= lh) {
+			int64_t du = traj_corner_u(&g->corner, ds); /* ds / Lh, Q30 */
+			int32_t du2 = (int32_t)((du * du) >> 30);
+			q32_t corr = fx_mul_q30(g->corner.phi_deg, du2) / 8;
+			hm = (g->h + h1) / 2 + (s <= lh ? -corr : corr);
+		} else {
+			hm = traj_corner_heading(&g->corner, s_old + ds / 2);
+		}
+		g->h = h1;
+		int32_t sn, cs;
+		if (hm < CORNER_SMALL_DEG && hm > -CORNER_SMALL_DEG) {
+			/* Entering (the step that blends in from the line): the
+			 * entry direction turned by hm to first order; the error,
+			 * hm^2 / 2 in radians, is below the Q30 resolution. */
+			int64_t r30 = fx_mul_fit(hm, DEG_TO_RAD_Q32) >> 2;
+			cs = g->ux - (int32_t)((g->uy * r30) >> 30);
+			sn = g->uy + (int32_t)((g->ux * r30) >> 30);
+		} else {
+			fx_sincos_bam(fx_deg_to_bam(g->p0.th_deg + hm), &sn, &cs);
+		}
+		out->x_mm += fx_mul_q30(ds, cs);
+		out->y_mm += fx_mul_q30(ds, sn);
+		out->th_deg = fx_wrap_deg(g->p0.th_deg + h1);
+		break;
+	}
+	default:
+		break;
+	}
+}
+
+/* Body twist that carries the reference from a to b (midpoint heading). */
+static void twist_between(const motion_t *m, const fx_pose_t *a, const fx_pose_t *b, fx_twist_t *t)
+{
+	q32_t dth = fx_wrap_deg(b->th_deg - a->th_deg);
+	q32_t dx = b->x_mm - a->x_mm, dy = b->y_mm - a->y_mm;
+	uint32_t mid = fx_deg_to_bam(a->th_deg + dth / 2);
+	int32_t c, s;
+	fx_sincos_bam(mid, &s, &c);
+	t->vx_pt = fx_mul_q30(dx, c) + fx_mul_q30(dy, s);
+	t->vy_pt = m->p.kin == MOTION_KIN_OMNI ? fx_mul_q30(dy, c) - fx_mul_q30(dx, s) : 0;
+	t->w_pt = dth;
+}
+
+/* True when the piece just finished flows into the next without stopping. */
+static bool blends_onward(motion_t *m, uint8_t finished_kind)
+{
+	if (m->q_count == 0)
+		return false;
+	motion_cmd_t *c = q_at(m, 0);
+	if (c->kind != MCMD_CRUISE || !c->has_corner)
+		return false;
+	return finished_kind == SEG_LINE || finished_kind == SEG_CORNER;
+}
+
+/* A stop came to rest: the commands it braked through are discarded. */
+static void stop_done(motion_t *m)
+{
+	m->stopping = false;
+	while (m->stop_drop)
+		pop(m);
+	m->seg.kind = SEG_NONE;
+	m->mode = m->q_count ? MODE_PATH : MODE_IDLE;
+}
+
+/* The three parts of path_tick below are inline by force: left to the
+ * compiler (which inlines them too), the cruise's dearest tick cost 13
+ * more instructions, 1,001 of its 1,000 (tools/bench/tickcost.sh). */
+
+/* The active piece's speed this tick: the profile's step at the piece's
+ * limits (computed once per piece); braking, at most the acceleration
+ * limit below the present speed. */
+static inline __attribute__((always_inline)) q32_t piece_speed(motion_t *m, bool braking)
+{
+	if (!m->lim_ok) {
+		piece_limits(m, &m->lim_vmax, &m->lim_a);
+		m->lim_extra = piece_horizon_extra(m);
+		m->lim_cruise = -1;
+		m->lim_n = -1;
+		m->lim_ok = true;
+	}
+	q32_t d = m->seg.len - m->seg.s + m->lim_extra;
+	q32_t u;
+	if (m->v == m->lim_vmax) {
+		/* At the cap with room to stop from it, traj_step keeps
+		 * the speed: skip it (its braking distance divides). */
+		if (m->lim_cruise < 0)
+			m->lim_cruise = m->lim_vmax + traj_brake_dist(m->lim_vmax, m->lim_a);
+		u = d >= m->lim_cruise ? m->v
+				       : traj_step_near(m->v, d, m->lim_vmax, m->lim_a, &m->lim_n);
+	} else {
+		u = traj_step_near(m->v, d, m->lim_vmax, m->lim_a, &m->lim_n);
+	}
+	if (braking) {
+		/* Stop at the acceleration limit, along the path. */
+		q32_t amax = piece_limit(&m->seg, m->amax_t_pt2, m->amax_r_pt2);
+		u = fx_min64(u, fx_max64(m->v - amax, 0));
+	}
+	return u;
+}
+
+/* Advances the active piece by step, short of its end; true when that
+ * gave the tick's twist (a turn's; an arc's exact rates, its pose being
+ * analytic). */
+static inline __attribute__((always_inline)) bool piece_move(motion_t *m, q32_t step,
+							     fx_twist_t *out)
+{
+	piece_advance(m, m->seg.s + step);
+	m->seg.s += step;
+	if (m->seg.kind == SEG_TURN && m->seg.s != step) {
+		*out = (fx_twist_t){.w_pt = m->seg.dir * step};
+		return true;
+	}
+	if (m->seg.kind == SEG_ARC) {
+		q32_t w = m->seg.dir * step;
+		out->vx_pt = fx_mul(w, m->seg.arc_kx);
+		out->vy_pt = fx_mul(w, m->seg.arc_ky);
+		out->w_pt = w;
+		return true;
+	}
+	return false;
+}
+
+/* The active piece is complete: land exactly on its end (a corner's
+ * integration arrives within nanometres of its planned exit). True when
+ * the path flows on into the next piece; false at a stop, whose last step
+ * covered the exact remainder (< a). */
+static inline __attribute__((always_inline)) bool piece_finish(motion_t *m)
+{
+	m->ref = m->seg.p_end;
+	uint8_t kind = m->seg.kind;
+	m->seg.kind = SEG_NONE;
+	if (!blends_onward(m, kind)) {
+		m->v = 0;
+		m->rest_tick = true;
+		return false;
+	}
+	if (kind == SEG_LINE && q_at(m, 0)->corner.lh_mm != 0) {
+		/* Into the corner here, not through next_piece: this is
+		 * the dearest tick of a cruise (a collinear pass has no
+		 * corner piece). */
+		corner_piece(m, q_at(m, 0));
+		limits_changed(m);
+	}
+	return true;
+}
+
+static void path_tick(motion_t *m, fx_twist_t *out)
+{
+	bool braking = m->paused || m->stopping;
+	if (braking && m->v == 0) {
+		if (m->stopping)
+			stop_done(m);
+		*out = (fx_twist_t){0};
+		return;
+	}
+	fx_pose_t start = m->ref;
+	q32_t budget = -1;
+	/* Path length covered this tick, and whether every piece it crossed is
+	 * a straight line or a corner (path length and heading change are then
+	 * the whole twist of a differential base). */
+	q32_t moved = 0;
+	bool along = true;
+	int8_t dir = 0;
+	for (;;) {
+		if (m->seg.kind == SEG_NONE) {
+			if (m->q_count == 0) {
+				m->mode = MODE_IDLE;
+				m->v = 0;
+				m->rest_tick = false;
+				break;
+			}
+			if (!next_piece(m)) {
+				/* A stage skipped as too short may have set up its
+				 * piece: none is left, or the next command would run
+				 * it (as the end of its own line). */
+				m->seg.kind = SEG_NONE;
+				pop(m);
+				continue;
+			}
+			m->seg.s = 0;
+			limits_changed(m);
+			if (m->rest_tick) {
+				/* A stop is a tick at zero before the next piece: the
+				 * stopping piece's last step was its remainder (up to
+				 * a), and a next piece that starts the other way takes
+				 * a as well; both in one tick would change the speed by
+				 * up to 2a (tests/fuzz/findings/fuzz_ops-opposite-
+				 * turns-after-a-stop: 390 deg/s^2 on a 360 limit). */
+				m->rest_tick = false;
+				*out = (fx_twist_t){0};
+				return;
+			}
+		}
+		if (budget < 0) {
+			budget = piece_speed(m, braking);
+			m->v = budget;
+		}
+		q32_t rem = m->seg.len - m->seg.s;
+		along = along &&
+			(m->seg.kind == SEG_CORNER || (m->seg.kind == SEG_LINE && m->seg.dth == 0));
+		if (dir == 0)
+			dir = m->seg.dir;
+		if (budget < rem) {
+			moved += budget;
+			if (piece_move(m, budget, out))
+				return;
+			break;
+		}
+		budget -= rem;
+		moved += rem;
+		if (!piece_finish(m) || budget == 0)
+			break;
+	}
+	if (along && m->p.kin == MOTION_KIN_DIFF) {
+		/* The path length at the step's heading change; the odometry
+		 * integrates it at the midpoint heading, as the corner's own
+		 * integration does. Lines here all run the same way: only cruise
+		 * lines blend, and they run forward. */
+		*out = (fx_twist_t){.vx_pt = dir * moved,
+				    .w_pt = fx_wrap_deg(m->ref.th_deg - start.th_deg)};
+		return;
+	}
+	twist_between(m, &start, &m->ref, out);
+}
+
+void motion_tick(motion_t *m, const fx_pose_t *measured, fx_twist_t *out)
+{
+	*out = (fx_twist_t){0};
+	switch (m->mode) {
+	case MODE_PATH:
+		path_tick(m, out);
+		m->vel = *out;
+		break;
+	case MODE_JOG:
+	case MODE_JOYSTICK:
+		motion_velocity_tick(m, out);
+		odom_integrate(&m->ref, out, NULL);
+		break;
+	case MODE_CONTINUOUS:
+		motion_continuous_tick(m, out);
+		break;
+	default:
+		m->stopping = false;
+		m->vel = (fx_twist_t){0};
+		/* Idle: follow the measured pose so relative moves start from it. */
+		if (measured)
+			m->ref = *measured;
+		break;
+	}
+	/* A velocity mode that ended hands over to queued path commands. */
+	if (m->mode == MODE_IDLE && m->q_count > 0)
+		m->mode = MODE_PATH;
+	if (m->mode == MODE_IDLE && m->joystick)
+		m->mode = MODE_JOYSTICK;
+}

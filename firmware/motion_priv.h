@@ -1,0 +1,91 @@
+/* Motion engine internals shared by its files; motion.h is the interface.
+ *
+ * The files, callers above callees; nothing calls back up:
+ *   motion.c        init, settings, setPosition, pause/stop/halt, queries
+ *   motion_queue.c  the commands that queue a move
+ *   motion_path.c   motion_tick (the mode dispatch), the path mode's tick
+ *                   and its pieces
+ *   motion_vel.c    jog, joystick and continuous modes: commands and ticks
+ *   motion_plan.c   cruise lines, corner planning and the backward pass
+ *   motion_geom.c   geometry the commands and the pieces share
+ * and below them all the helpers here, inline wherever they are used.
+ *
+ * motion_tick shares a file with the path tick and its pieces: a call
+ * between files costs the blended cruise's dearest tick 9 to 17
+ * instructions (host, tools/bench/tickcost.sh, measured), which its budget
+ * of 1,000 does not have. The velocity modes' ticks are such calls: 18 to
+ * 23 instructions a jog or retarget tick, far inside their budgets. The
+ * Cortex-M images link with -flto.
+ */
+#ifndef MOTION_PRIV_H
+#define MOTION_PRIV_H
+
+#include "motion.h"
+
+#define TINY_MM	 ((q32_t)4295) /* 1e-6 mm: below this a line has no length */
+#define TINY_DEG ((q32_t)4295) /* 1e-6 deg */
+
+static inline motion_cmd_t *q_at(motion_t *m, uint8_t i)
+{
+	return &m->q[(uint8_t)(m->q_head + i) % MOTION_QUEUE_LEN];
+}
+
+/* The active piece's limits and stopping-distance term are cached: every
+ * change to the settings or the queue drops them, and the next tick
+ * recomputes them once. */
+static inline void limits_changed(motion_t *m)
+{
+	m->lim_ok = false;
+}
+
+/* Effective translation speed limit (set value, caution cap). */
+static inline q32_t vt_eff(const motion_t *m)
+{
+	q32_t v = m->v_t_pt;
+	if (m->cap_t_pt > 0 && m->cap_t_pt < v)
+		v = m->cap_t_pt;
+	return v;
+}
+
+/* Inline: out of line, the blended cruise's dearest tick cost 12 more
+ * instructions (tools/bench/tickcost.sh, measured). */
+static inline __attribute__((always_inline)) void pop(motion_t *m)
+{
+	if (m->q_count == 0)
+		return;
+	m->q_head = (uint8_t)((m->q_head + 1) % MOTION_QUEUE_LEN);
+	m->q_count--;
+	if (m->stop_drop)
+		m->stop_drop--;
+	if (m->pass_todo)
+		m->pass_todo--;
+	limits_changed(m);
+}
+
+static inline bool twist_zero(const fx_twist_t *t)
+{
+	return t->vx_pt == 0 && t->vy_pt == 0 && t->w_pt == 0;
+}
+
+/* motion_geom.c */
+/* Rotate a body-frame vector into the world frame at heading th. */
+void motion_body_to_world(q32_t th, q32_t bx, q32_t by, q32_t *wx, q32_t *wy);
+/* Length of (dx, dy) and its unit direction in Q30 (0, 0 for no length). */
+q32_t motion_unit_dir(q32_t dx, q32_t dy, int32_t *ux, int32_t *uy);
+
+/* motion_plan.c */
+/* A cruise command's line geometry, once its start is known. */
+void motion_cruise_set_start(motion_cmd_t *c, q32_t sx, q32_t sy);
+/* Plan the corner at queued cruise command i (blending into i + 1); true
+ * when one was planned (and the corner speeds with it). */
+bool motion_plan_corner(motion_t *m, uint8_t i);
+/* The corner speeds, for commands from index lo up with new geometry (0:
+ * the limits changed, all of them). */
+void motion_backward_pass_from(motion_t *m, uint8_t lo);
+void motion_backward_pass(motion_t *m);
+
+/* motion_vel.c: the ticks of the velocity modes. */
+void motion_velocity_tick(motion_t *m, fx_twist_t *out); /* jog, joystick */
+void motion_continuous_tick(motion_t *m, fx_twist_t *out);
+
+#endif

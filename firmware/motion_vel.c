@@ -1,0 +1,251 @@
+/* Motion engine: the velocity modes (jog, joystick, continuous goal), their
+ * commands and their ticks. */
+#include "motion_priv.h"
+
+#include <stddef.h>
+
+static bool velocity_mode_allowed(const motion_t *m)
+{
+	return m->mode == MODE_IDLE || m->mode == MODE_JOG || m->mode == MODE_CONTINUOUS;
+}
+
+bool motion_jog(motion_t *m, q32_t vx, q32_t vy, q32_t w)
+{
+	if (!velocity_mode_allowed(m) || m->q_count > 0 || m->stopping || m->paused)
+		return false;
+	int64_t hz = m->p.tick_hz;
+	m->vtarget.vx_pt = vx / hz;
+	m->vtarget.vy_pt = vy / hz;
+	m->vtarget.w_pt = w / hz;
+	m->jog_age_ticks = 0;
+	m->mode = MODE_JOG;
+	return true;
+}
+
+bool motion_continuous_rel(motion_t *m, const fx_pose_t *rel)
+{
+	if (!velocity_mode_allowed(m) || m->q_count > 0 || m->stopping)
+		return false;
+	fx_pose_t t = m->ref;
+	q32_t dx, dy;
+	motion_body_to_world(m->ref.th_deg, rel->x_mm, rel->y_mm, &dx, &dy);
+	t.x_mm += dx;
+	t.y_mm += dy;
+	t.th_deg = fx_wrap_deg(m->ref.th_deg + rel->th_deg);
+	m->goal = t;
+	m->goal_position_done = false;
+	/* From rest the first tick picks the direction; a retarget keeps the
+	 * one the unit is driving in. */
+	if (m->mode != MODE_CONTINUOUS)
+		m->goal_reverse = false;
+	m->mode = MODE_CONTINUOUS;
+	return true;
+}
+
+void motion_joystick_enable(motion_t *m, bool on)
+{
+	m->joystick = on;
+	if (on) {
+		if (m->mode == MODE_IDLE || m->mode == MODE_JOG || m->mode == MODE_CONTINUOUS)
+			m->mode = MODE_JOYSTICK;
+		m->vtarget = (fx_twist_t){0};
+	} else if (m->mode == MODE_JOYSTICK) {
+		/* Decelerate at the acceleration limit, then idle. */
+		m->vtarget = (fx_twist_t){0};
+		m->stopping = true;
+	}
+}
+
+void motion_joystick_input(motion_t *m, int16_t x, int16_t y, int16_t r, bool present)
+{
+	if (m->mode != MODE_JOYSTICK || m->stopping)
+		return;
+	if (!present) {
+		m->vtarget = (fx_twist_t){0};
+		return;
+	}
+	m->vtarget.vx_pt = vt_eff(m) / 32767 * x;
+	m->vtarget.vy_pt = m->p.kin == MOTION_KIN_OMNI ? vt_eff(m) / 32767 * y : 0;
+	m->vtarget.w_pt = m->v_r_pt / 32767 * r;
+}
+
+/* Move x toward target by at most step. */
+static q32_t slew(q32_t x, q32_t target, q32_t step)
+{
+	if (target > x + step)
+		return x + step;
+	if (target < x - step)
+		return x - step;
+	return target;
+}
+
+/* Move the translation (x, y) toward its target by at most step as a
+ * vector: component-wise steps would let a diagonal accelerate at sqrt(2)
+ * times the limit on an omni base. */
+static void slew2(q32_t *x, q32_t *y, q32_t tx, q32_t ty, q32_t step)
+{
+	q32_t dx = tx - *x, dy = ty - *y;
+	if (dy == 0 || dx == 0) {
+		*x = slew(*x, tx, step);
+		*y = slew(*y, ty, step);
+		return;
+	}
+	q32_t len = fx_hypot(dx, dy);
+	if (len <= step) {
+		*x = tx;
+		*y = ty;
+		return;
+	}
+	/* Unit direction (Q30) times the step: exact to a raw unit. */
+	*x += fx_mul_q30(step, (int32_t)(fx_div(dx, len) >> 2));
+	*y += fx_mul_q30(step, (int32_t)(fx_div(dy, len) >> 2));
+}
+
+/* The accelerations the velocity modes slew at: the set ones, or the
+ * limits while braking (pause, stop). */
+static void slew_rates(const motion_t *m, bool braking, q32_t *at, q32_t *ar)
+{
+	*at = m->a_t_pt2;
+	*ar = m->a_r_pt2;
+	if (braking) {
+		*at = m->amax_t_pt2;
+		*ar = m->amax_r_pt2;
+	}
+}
+
+/* Jog and joystick: slew toward the target velocity. */
+void motion_velocity_tick(motion_t *m, fx_twist_t *out)
+{
+	bool braking = m->stopping || m->paused;
+	fx_twist_t tgt = m->vtarget;
+	q32_t at, ar;
+	slew_rates(m, braking, &at, &ar);
+	if (m->mode == MODE_JOG && ++m->jog_age_ticks > m->jog_timeout_ticks)
+		tgt = (fx_twist_t){0};
+	if (braking)
+		tgt = (fx_twist_t){0};
+	/* Caution cap and set velocity bound the target. */
+	q32_t vt = vt_eff(m);
+	tgt.vx_pt = fx_clamp64(tgt.vx_pt, -vt, vt);
+	tgt.vy_pt = fx_clamp64(tgt.vy_pt, -vt, vt);
+	tgt.w_pt = fx_clamp64(tgt.w_pt, -m->v_r_pt, m->v_r_pt);
+	slew2(&m->vel.vx_pt, &m->vel.vy_pt, tgt.vx_pt, tgt.vy_pt, at);
+	m->vel.w_pt = slew(m->vel.w_pt, tgt.w_pt, ar);
+	*out = m->vel;
+	if (twist_zero(&m->vel) && twist_zero(&tgt)) {
+		bool jog_done = m->mode == MODE_JOG && (m->jog_age_ticks > m->jog_timeout_ticks ||
+							braking || twist_zero(&m->vtarget));
+		bool joystick_done = m->mode == MODE_JOYSTICK && m->stopping;
+		if (jog_done || joystick_done) {
+			m->mode = MODE_IDLE;
+			m->stopping = false;
+		}
+	}
+}
+
+/* Toward the goal on a differential base, heading error e: drive forward
+ * or backward, whichever faces the goal: a goal that falls behind (a
+ * retarget inside the stopping distance, an overshoot) is reached by
+ * backing along the line, not by turning round at speed and circling it.
+ * The 20 degree band about the side keeps the choice from chattering. */
+static void goal_want_diff(motion_t *m, q32_t e, q32_t dist, fx_twist_t *want)
+{
+	q32_t ae = fx_abs64(e);
+	if (!m->goal_reverse && ae > fx_from_int(100))
+		m->goal_reverse = true;
+	else if (m->goal_reverse && ae < fx_from_int(80))
+		m->goal_reverse = false;
+	if (m->goal_reverse) {
+		e = fx_wrap_deg(e + fx_from_int(180));
+		ae = fx_abs64(e);
+	}
+	/* Turn toward the goal; translate along the projected distance. */
+	q32_t wr = fx_min64(traj_umax(ae, m->a_r_pt2), m->v_r_pt);
+	want->w_pt = e < 0 ? -wr : wr;
+	uint32_t b = fx_deg_to_bam(e);
+	q32_t proj = fx_mul_q30(dist, fx_cos_bam(b));
+	if (proj > 0 && ae < fx_from_int(45))
+		want->vx_pt = fx_min64(traj_umax(proj, m->a_t_pt2), vt_eff(m));
+	if (m->goal_reverse)
+		want->vx_pt = -want->vx_pt;
+	if (dist < m->v_t_pt && ae < fx_from_int(1))
+		want->w_pt = 0;
+}
+
+/* The velocity wanted toward the goal: its position (dx, dy away, at
+ * dist) until reached, then its heading. */
+static void goal_want(motion_t *m, q32_t dx, q32_t dy, q32_t dist, fx_twist_t *want)
+{
+	if (!m->goal_position_done) {
+		q32_t bearing = fx_atan2_deg(dy, dx);
+		q32_t e = fx_wrap_deg(bearing - m->ref.th_deg);
+		if (m->p.kin == MOTION_KIN_OMNI) {
+			q32_t sp = fx_min64(traj_umax(dist, m->a_t_pt2), vt_eff(m));
+			uint32_t b = fx_deg_to_bam(e);
+			want->vx_pt = fx_mul_q30(sp, fx_cos_bam(b));
+			want->vy_pt = fx_mul_q30(sp, fx_sin_bam(b));
+		} else {
+			goal_want_diff(m, e, dist, want);
+		}
+	} else {
+		q32_t e = fx_wrap_deg(m->goal.th_deg - m->ref.th_deg);
+		q32_t wr = fx_min64(traj_umax(fx_abs64(e), m->a_r_pt2), m->v_r_pt);
+		want->w_pt = e < 0 ? -wr : wr;
+	}
+}
+
+/* After the step: land on the goal heading exactly (the last turning
+ * step), or on the goal position once within reach of it. */
+static void goal_arrive(motion_t *m, q32_t at, q32_t ar)
+{
+	if (m->goal_position_done) {
+		q32_t e = fx_wrap_deg(m->goal.th_deg - m->ref.th_deg);
+		if (fx_abs64(e) <= fx_abs64(m->vel.w_pt) && fx_abs64(m->vel.w_pt) <= ar) {
+			/* Final step: land on the goal heading exactly. */
+			m->ref.th_deg = m->goal.th_deg;
+			m->vel = (fx_twist_t){0};
+			m->mode = MODE_IDLE;
+		}
+	} else if (fx_hypot(m->goal.x_mm - m->ref.x_mm, m->goal.y_mm - m->ref.y_mm) < TINY_MM &&
+		   fx_abs64(m->vel.vx_pt) <= at) {
+		m->ref.x_mm = m->goal.x_mm;
+		m->ref.y_mm = m->goal.y_mm;
+		m->vel.vx_pt = 0;
+		m->vel.vy_pt = 0;
+		m->goal_position_done = true;
+	}
+}
+
+/* Continuous mode: drive toward the goal with slewed velocities. */
+void motion_continuous_tick(motion_t *m, fx_twist_t *out)
+{
+	bool braking = m->stopping || m->paused;
+	fx_twist_t want = {0};
+	q32_t dx = m->goal.x_mm - m->ref.x_mm, dy = m->goal.y_mm - m->ref.y_mm;
+	q32_t dist = fx_hypot(dx, dy);
+	if (!m->goal_position_done && dist < TINY_MM && fx_abs64(m->vel.vx_pt) == 0 &&
+	    m->vel.vy_pt == 0)
+		m->goal_position_done = true;
+	goal_want(m, dx, dy, dist, &want);
+	q32_t at, ar;
+	slew_rates(m, braking, &at, &ar);
+	if (braking)
+		want = (fx_twist_t){0};
+	q32_t prev_vx = m->vel.vx_pt;
+	slew2(&m->vel.vx_pt, &m->vel.vy_pt, want.vx_pt, want.vy_pt, at);
+	m->vel.w_pt = slew(m->vel.w_pt, want.w_pt, ar);
+	/* Never step past the goal: the last step covers the exact remainder
+	 * (backing up, the same with the signs turned). */
+	q32_t dir = m->goal_reverse ? -1 : 1;
+	if (!m->goal_position_done && dir * m->vel.vx_pt > dist && m->p.kin == MOTION_KIN_DIFF)
+		m->vel.vx_pt = dir * fx_max64(dist, dir * prev_vx - at);
+	*out = m->vel;
+	odom_integrate(&m->ref, out, NULL);
+	goal_arrive(m, at, ar);
+	if (braking && twist_zero(&m->vel)) {
+		if (m->stopping) {
+			m->stopping = false;
+			m->mode = MODE_IDLE;
+		}
+	}
+}

@@ -1,0 +1,417 @@
+/* VehicleService core: the control tick and the supervision it runs
+ * (loop lateness, link watchdog, drives and encoders, inputs, joystick,
+ * position). One file: the supervision inlines into vehicle_tick, and a
+ * call between files costs every tick. */
+#include <stddef.h>
+#include <stdint.h>
+
+#include "vehicle_priv.h"
+
+/* Reports are out of line (cold): their text buffers and calls stay off
+ * the every-tick path. */
+#define COLD __attribute__((cold, noinline))
+
+static COLD void loop_stalled(vehicle_t *v, uint32_t late_us)
+{
+	char s[VS_ALARM_SOURCE_MAX];
+	size_t pos = vehicle_put_str(s, sizeof s, 0, "control loop stalled ");
+	pos = vehicle_put_dec(s, sizeof s, pos, late_us / 1000u, 1);
+	vehicle_put_str(s, sizeof s, pos, " ms");
+	vehicle_raise_fault(v, ALM_F_LOOP_STALL, s);
+}
+
+/* Wake-up lateness is the platform's doing (a busy host, a blocking call):
+ * the reference advances by ticks, so a late tick only holds it while the
+ * drives keep their last setpoint, and the wheel runs ahead by speed times
+ * lateness, which the position loop takes back. Late ticks are counted;
+ * only a stall longer than loop_late_ms stops the unit (docs/linux.md). */
+static void check_lateness(vehicle_t *v, uint32_t now_us)
+{
+	if (v->have_now) {
+		/* Wrap-safe difference; an early tick is not late. */
+		int32_t late = (int32_t)(now_us - v->last_now_us) - (int32_t)v->period_us;
+		if (late > 0 && (uint32_t)late * 2u > v->period_us) {
+			v->late_ticks++;
+			if ((uint32_t)late > v->max_late_us)
+				v->max_late_us = (uint32_t)late;
+			if ((uint32_t)late > v->loop_late_us)
+				loop_stalled(v, (uint32_t)late);
+		}
+	}
+	v->last_now_us = now_us;
+	v->have_now = true;
+}
+
+void vehicle_set_plan_budget(vehicle_t *v, uint8_t n)
+{
+	motion_set_plan_budget(&v->motion, n);
+}
+
+bool vehicle_plan_idle(vehicle_t *v)
+{
+	return motion_plan_idle(&v->motion);
+}
+
+void vehicle_tick_busy(vehicle_t *v, uint32_t busy_us)
+{
+	if (busy_us > v->period_us) {
+		v->overruns++;
+		vehicle_raise_fault(v, ALM_F_OVERRUN, "control tick overrun");
+	}
+}
+
+void vehicle_link_heard(vehicle_t *v, vs_link_id_t link)
+{
+	v->link_last = (uint8_t)link;
+	v->link_silent_ticks = 0;
+}
+
+uint32_t vehicle_link_timeout(const vehicle_t *v)
+{
+	return v->cfg.link_timeout_ms;
+}
+
+void vehicle_set_link_timeout(vehicle_t *v, uint32_t ms)
+{
+	v->cfg.link_timeout_ms = ms;
+	/* ms * tick_hz / 1000, rounded up: at least one tick when on. */
+	v->link_timeout_ticks = (uint32_t)(((uint64_t)ms * v->cfg.tick_hz + 999u) / 1000u);
+	v->link_silent_ticks = 0;
+}
+
+static COLD void link_lost(vehicle_t *v)
+{
+	static const char *const names[] = {"console", "frames", "CAN"};
+	char s[VS_ALARM_SOURCE_MAX];
+	size_t pos = vehicle_put_str(s, sizeof s, 0, "link lost: ");
+	pos = vehicle_put_str(s, sizeof s, pos, names[v->link_last < 3 ? v->link_last : 0]);
+	pos = vehicle_put_str(s, sizeof s, pos, " silent ");
+	pos = vehicle_put_dec(s, sizeof s, pos, v->cfg.link_timeout_ms, 1);
+	vehicle_put_str(s, sizeof s, pos, " ms");
+	motion_stop(&v->motion);
+	alarm_raise(&v->alarms, ALM_W_LINK_LOST, s);
+}
+
+/* Link watchdog: motion commanded from a host stops when the host falls
+ * silent. The joystick drives locally and a paused unit holds still, so
+ * neither needs the host; the stop discards the queue and nothing resumes
+ * by itself. */
+static void supervise_link(vehicle_t *v)
+{
+	if (v->link_silent_ticks < UINT32_MAX)
+		v->link_silent_ticks++;
+	if (v->link_timeout_ticks == 0 || v->link_silent_ticks < v->link_timeout_ticks)
+		return;
+	if (v->joystick_on || motion_is_paused(&v->motion) || !motion_has_work(&v->motion))
+		return;
+	v->link_silent_ticks = 0;
+	link_lost(v);
+}
+
+static void encoder_stuck(vehicle_t *v, uint8_t i)
+{
+	char s[VS_ALARM_SOURCE_MAX];
+	v->encoder_still_ticks[i] = 0;
+	vehicle_axis_text(s, sizeof s, "encoder ", i, " stuck");
+	vehicle_raise_fault(v, ALM_F_ENCODER_STUCK, s);
+}
+
+/* Encoder supervision, in the same pass as the drive sample: a wheel
+ * commanded above the stuck threshold whose count did not change. */
+static inline void supervise_encoder(vehicle_t *v, uint8_t i, bool moved)
+{
+	int32_t cps = v->wheel_cps_q8[i];
+	bool commanded =
+	    v->servo && (cps >= v->encoder_stuck_cps_q8 || cps <= -v->encoder_stuck_cps_q8);
+	if (!commanded || moved)
+		v->encoder_still_ticks[i] = 0;
+	else if (++v->encoder_still_ticks[i] >= v->encoder_stuck_ticks)
+		encoder_stuck(v, i);
+}
+
+static COLD void drive_silent_report(vehicle_t *v, uint8_t i)
+{
+	char s[VS_ALARM_SOURCE_MAX];
+	v->drive_timeout_reported[i] = true;
+	vehicle_axis_text(s, sizeof s, "drive ", i, " not answering");
+	vehicle_raise_fault(v, ALM_F_DRIVE_TIMEOUT, s);
+}
+
+static COLD void drive_fault_report(vehicle_t *v, uint8_t i, uint16_t fc)
+{
+	char s[VS_ALARM_SOURCE_MAX];
+	size_t pos = vehicle_put_str(s, sizeof s, 0, "drive ");
+	pos = vehicle_put_dec(s, sizeof s, pos, i, 1);
+	pos = vehicle_put_str(s, sizeof s, pos, " fault ");
+	vehicle_put_hex4(s, sizeof s, pos, fc);
+	vehicle_raise_fault(v, ALM_F_DRIVE, s);
+}
+
+static void sample_drives(vehicle_t *v)
+{
+	/* Each drive's condition is reported once per occurrence (and again
+	 * after clearAlarm while it persists), so two faulted drives do not
+	 * take turns at the front of the list every tick. */
+	for (uint8_t i = 0; i < v->naxes; i++) {
+		hal_drive_state_t st = {0};
+		v->hal.ops->drive_read(v->hal.ctx, i, &st);
+		if (!st.fresh) {
+			if (v->powered && v->drive_silent_ticks[i] < UINT32_MAX)
+				v->drive_silent_ticks[i]++;
+			if (v->powered && v->drive_silent_ticks[i] > v->drive_timeout_ticks &&
+			    !v->drive_timeout_reported[i])
+				drive_silent_report(v, i);
+			supervise_encoder(v, i, false);
+			continue;
+		}
+		v->drive_silent_ticks[i] = 0;
+		v->drive_timeout_reported[i] = false;
+		v->drive[i] = st;
+		supervise_encoder(v, i, st.position_counts != v->meas_counts[i]);
+		v->meas_counts[i] = st.position_counts;
+		uint16_t fc = v->powered ? st.fault_code : 0;
+		if (fc != 0 && fc != v->drive_fault_reported[i])
+			drive_fault_report(v, i, fc);
+		v->drive_fault_reported[i] = fc;
+	}
+}
+
+/* "battery below N.N V" as a fault (critical) or a warning (low). */
+static COLD void battery_report(vehicle_t *v, uint32_t code, uint32_t mv)
+{
+	char s[VS_ALARM_SOURCE_MAX];
+	size_t pos = vehicle_put_str(s, sizeof s, 0, "battery below ");
+	vehicle_put_volts(s, sizeof s, pos, mv);
+	if (code == ALM_F_BATTERY_CRITICAL)
+		vehicle_raise_fault_level(v, code, s);
+	else
+		alarm_raise(&v->alarms, code, s);
+}
+
+static void supervise_inputs(vehicle_t *v)
+{
+	const vs_hal_ops_t *o = v->hal.ops;
+	void *c = v->hal.ctx;
+
+	if (v->cfg.has_estop && o->estop(c))
+		vehicle_raise_fault_level(v, ALM_F_ESTOP, "emergency stop");
+
+	if (v->powered && !o->power_feedback(c)) {
+		v->powered = false;
+		vehicle_raise_fault(v, ALM_F_POWER_LOST, "main power lost");
+		/* Command the relay open as well: Unpowered means the circuit is
+		 * off, and a contact that recloses by itself must not bring the
+		 * drive supply back until setPower(true). */
+		o->power_set(c, false);
+	}
+
+	v->battery_mv = o->battery_mv(c);
+	if (v->battery_mv < v->battery_critical_mv)
+		battery_report(v, ALM_F_BATTERY_CRITICAL, v->battery_critical_mv);
+	/* Warn once per crossing; 0.1 V of hysteresis keeps noise from
+	 * repeating it. */
+	if (v->battery_low_armed && v->battery_mv < v->battery_low_mv) {
+		v->battery_low_armed = false;
+		battery_report(v, ALM_W_BATTERY_LOW, v->battery_low_mv);
+	} else if (v->battery_mv >= v->battery_low_mv + 100u) {
+		v->battery_low_armed = true;
+	}
+
+	/* Contact locks on its rising edge, so that after unlock the unit can
+	 * back away while the bumper is still pressed. */
+	if (v->cfg.has_contact_sensor) {
+		bool contact = o->contact(c);
+		if (contact && !v->contact_prev && v->sensor_lock) {
+			motion_stop(&v->motion);
+			v->locked = true;
+			alarm_raise(&v->alarms, ALM_W_CONTACT, "contact detected");
+		}
+		v->contact_prev = contact;
+	}
+
+	if (v->cfg.has_obstacle_input) {
+		bool obstacle = o->obstacle(c);
+		if (obstacle && !v->obstacle_prev) {
+			motion_stop(&v->motion);
+			v->stuck = true;
+			alarm_raise(&v->alarms, ALM_W_OBSTACLE, "obstacle detected");
+		} else if (!obstacle) {
+			v->stuck = false;
+		}
+		v->obstacle_prev = obstacle;
+
+		bool caution = o->obstacle_caution(c);
+		if (caution != v->caution_prev)
+			motion_set_caution(&v->motion, caution ? v->caution_vel_t : 0);
+		v->caution_prev = caution;
+	}
+}
+
+static int16_t deadband(int16_t a, int32_t db)
+{
+	int32_t x = a;
+	if (x > 32767)
+		x = 32767;
+	if (x < -32767)
+		x = -32767;
+	if (x <= db && x >= -db)
+		return 0;
+	/* Rescale so the output still spans the full range past the band. */
+	int32_t mag = (x < 0 ? -x : x) - db;
+	int32_t out = (int32_t)(((int64_t)mag * 32767) / (32767 - db));
+	return (int16_t)(x < 0 ? -out : out);
+}
+
+static void feed_joystick(vehicle_t *v)
+{
+	if (!v->joystick_on)
+		return;
+	hal_joystick_t js = {{0, 0, 0}, false};
+	if (v->cfg.has_joystick)
+		v->hal.ops->joystick(v->hal.ctx, &js);
+	if (!js.present) {
+		/* Off for good: a joystick coming back must not move the unit. */
+		motion_joystick_enable(&v->motion, false);
+		motion_stop(&v->motion);
+		v->joystick_on = false;
+		alarm_raise(&v->alarms, ALM_W_JOYSTICK_LOST, "joystick lost");
+		return;
+	}
+	int16_t x = 0, y = 0, r = 0;
+	if (v->servo && !v->locked && !v->stuck) {
+		x = deadband(js.axis[0], v->joystick_deadband_q15);
+		y = v->cfg.kinematics == VS_KIN_OMNI
+			? deadband(js.axis[1], v->joystick_deadband_q15)
+			: 0;
+		r = deadband(js.axis[2], v->joystick_deadband_q15);
+	}
+	motion_joystick_input(&v->motion, x, y, r, true);
+}
+
+/* "<what> <n> counts": the worst wheel's distance from its reference. */
+static COLD void counts_msg(char *s, const char *what, int64_t err_q32)
+{
+	int64_t n = err_q32 >> 32;
+	size_t pos = vehicle_put_str(s, VS_ALARM_SOURCE_MAX, 0, what);
+	pos = vehicle_put_dec(s, VS_ALARM_SOURCE_MAX, pos,
+			      (uint32_t)(n > UINT32_MAX ? UINT32_MAX : n), 1);
+	vehicle_put_str(s, VS_ALARM_SOURCE_MAX, pos, " counts");
+}
+
+static COLD void following_fault(vehicle_t *v, int64_t ferr)
+{
+	char s[VS_ALARM_SOURCE_MAX];
+	counts_msg(s, "following error ", ferr);
+	vehicle_raise_fault(v, ALM_F_FOLLOWING, s);
+}
+
+static COLD void settle_report(vehicle_t *v, int64_t ferr)
+{
+	char s[VS_ALARM_SOURCE_MAX];
+	counts_msg(s, "not in position: ", ferr);
+	alarm_raise(&v->alarms, ALM_W_NOT_IN_POSITION, s);
+}
+
+/* Pose-level hold at rest: the part of the pose error (the reference the
+ * motion ended on minus the odometry, in the unit's frame) that the wheel
+ * loop will not remove by itself, i.e. beyond what its wheels still have to
+ * travel, goes into the wheel references (kin.h). Wheels that reach their
+ * counts by another path than they left them (a push that turned and slid
+ * the base, the last corner of a route) leave such a remainder, since the
+ * pose depends on the path. A differential base cannot move sideways: its
+ * remainder across the heading stays (it shows in getPosition). Runs on the
+ * ticks at rest in which a wheel moved, so it costs a moving tick nothing. */
+static void hold_pose(vehicle_t *v)
+{
+	const fx_pose_t *r = motion_ref_pose(&v->motion);
+	q32_t ex = r->x_mm - v->odom.x_mm, ey = r->y_mm - v->odom.y_mm;
+	int32_t s, c;
+	fx_twist_t d, e;
+	fx_sincos_bam(fx_deg_to_bam(v->odom.th_deg), &s, &c);
+	kin_pending(&v->kin, &d);
+	e.vx_pt = fx_mul_q30(ex, c) + fx_mul_q30(ey, s) - d.vx_pt;
+	e.vy_pt =
+	    v->cfg.kinematics == VS_KIN_OMNI ? fx_mul_q30(ey, c) - fx_mul_q30(ex, s) - d.vy_pt : 0;
+	e.w_pt = fx_wrap_deg(r->th_deg - v->odom.th_deg) - d.w_pt;
+	kin_offset(&v->kin, &e);
+}
+
+/* In position (CiA 402's position window and window time): the reference
+ * at rest and every wheel within the window of it for the window time.
+ * Until then the motion is not done: the unit stays Busy, and Paused,
+ * Locked and Stuck wait for it too. A unit that does not get there within
+ * settle_timeout_ms raises warning 154 once and is taken as done (it holds
+ * where it is). */
+static void supervise_position(vehicle_t *v, int64_t ferr, const fx_twist_t *moved)
+{
+	/* The reference moved this tick (the command is its step; zero with
+	 * the servo off). */
+	if ((v->cmd.vx_pt | v->cmd.vy_pt | v->cmd.w_pt) != 0) {
+		v->inpos_ticks = 0;
+		v->settle_ticks = 0;
+		return;
+	}
+	if (!v->servo) {
+		/* Nothing to hold; servo on starts from the measured counts, in
+		 * position. */
+		v->inpos_ticks = v->window_ticks;
+		v->settle_ticks = 0;
+		return;
+	}
+	/* At rest, a wheel moved: the pose may have left its hold. */
+	if ((moved->vx_pt | moved->vy_pt | moved->w_pt) != 0)
+		hold_pose(v);
+	if (ferr <= v->window_q32) {
+		v->settle_ticks = 0;
+		if (v->inpos_ticks < v->window_ticks)
+			v->inpos_ticks++;
+	} else {
+		v->inpos_ticks = 0;
+		if (v->settle_ticks <= v->settle_timeout_ticks &&
+		    ++v->settle_ticks > v->settle_timeout_ticks)
+			settle_report(v, ferr);
+	}
+}
+
+bool vehicle_in_position(const vehicle_t *v)
+{
+	return !v->servo || v->inpos_ticks >= v->window_ticks ||
+	       v->settle_ticks > v->settle_timeout_ticks;
+}
+
+void vehicle_tick(vehicle_t *v, uint32_t now_us)
+{
+	check_lateness(v, now_us);
+	sample_drives(v);
+	supervise_inputs(v);
+	supervise_link(v);
+	feed_joystick(v);
+
+	fx_twist_t cmd;
+	/* At rest the reference stays where the motion ended and the wheel
+	 * loop holds the unit there: one owner of where the unit is. Only with
+	 * the servo off (wheels free) does it follow the odometry. */
+	motion_tick(&v->motion, v->servo ? NULL : &v->odom, &cmd);
+	if (!v->servo) {
+		/* Nothing may move with the servo off; the odometry still
+		 * follows wheels pushed by hand. */
+		cmd = (fx_twist_t){0, 0, 0};
+	}
+	v->cmd = cmd;
+
+	fx_twist_t delta;
+	int64_t ferr;
+	kin_step(&v->kin, &cmd, v->meas_counts, v->wheel_cps_q8, &delta, &ferr);
+	odom_integrate(&v->odom, &delta, &v->odom_trig);
+
+	if (v->servo && ferr > v->following_err_max_q32)
+		following_fault(v, ferr);
+	supervise_position(v, ferr, &delta);
+
+	if (!v->servo)
+		for (uint8_t i = 0; i < v->naxes; i++)
+			v->wheel_cps_q8[i] = 0;
+	for (uint8_t i = 0; i < v->naxes; i++)
+		v->hal.ops->drive_set_velocity(v->hal.ctx, i, v->wheel_cps_q8[i]);
+	v->ticks++;
+}
