@@ -1,63 +1,84 @@
-/* Configuration defaults and validation.
+/* Configuration defaults and validation, from the table of
+ * config_fields.def.
  *
  * Runs once at init, before anything moves; it is the only firmware code
  * besides vs_api.c that touches doubles (soft-float is fine here). Every
- * range test is written "lo <= x && x <= hi" so that NaN fails it too.
+ * range test is written so that NaN fails it too.
  */
 #include <stddef.h>
 
 #include "config.h"
 
-/* Reference differential base: 150 mm wheels, 400 mm track, 4096-line
- * encoders read in quadrature, 24 V battery pack. */
-void vs_config_defaults(vs_config_t *c)
+/* The C type of each row type. */
+#define VS_CFG_CTYPE_DOUBLE double
+#define VS_CFG_CTYPE_U32    uint32_t
+#define VS_CFG_CTYPE_U16    uint16_t
+#define VS_CFG_CTYPE_BOOL   bool
+#define VS_CFG_CTYPE_KIN    vs_kinematics_t
+/* Element k of row member m of type t in configuration c (const: CELEM). */
+#define ELEM(c, m, t, k)  (((VS_CFG_CTYPE_##t *)(void *)&(c)->m)[k])
+#define CELEM(c, m, t, k) (((const VS_CFG_CTYPE_##t *)(const void *)&(c)->m)[k])
+
+/* Each row's type and count match its member. */
+#define ROW_SIZE(m, n, t, ...)                                                                     \
+	_Static_assert(sizeof(((vs_config_t *)0)->m) == (n) * sizeof(VS_CFG_CTYPE_##t),            \
+		       #m ": type or n");
+VS_CONFIG_FIELDS(ROW_SIZE)
+#undef ROW_SIZE
+_Static_assert(sizeof(vs_config_t) <= UINT16_MAX, "offsets fit the rows");
+
+/* The firmware's columns for readers: names, where and what. */
+#define ROW(m, cnt, t, ...)                                                                        \
+	{.name = #m, .off = (uint16_t)offsetof(vs_config_t, m), .type = VS_CFG_##t, .n = (cnt)},
+const vs_config_field_t vs_config_fields[VS_CONFIG_NFIELDS] = {VS_CONFIG_FIELDS(ROW)};
+#undef ROW
+
+/* Element k of row f's member, as the given type. */
+#define AT(type)  (((type *)(void *)((char *)c + f->off))[k])
+#define CAT(type) (((const type *)(const void *)((const char *)c + f->off))[k])
+
+double vs_config_get(const vs_config_t *c, const vs_config_field_t *f, unsigned k)
 {
-	/* Field by field: the struct is large and firmware has no memset. */
-	c->kinematics = VS_KIN_DIFF;
-	c->tick_hz = 1000;
+	switch (f->type) {
+	case VS_CFG_DOUBLE:
+		return CAT(double);
+	case VS_CFG_U32:
+		return (double)CAT(uint32_t);
+	case VS_CFG_U16:
+		return (double)CAT(uint16_t);
+	case VS_CFG_BOOL:
+		return CAT(bool) ? 1.0 : 0.0;
+	default:
+		return (double)CAT(vs_kinematics_t);
+	}
+}
 
-	c->wheel_diameter_mm = 150.0;
-	c->track_width_mm = 400.0;
-	c->wheel_base_mm = 0.0; /* unused on a differential base */
-	c->encoder_counts_per_rev = 4096u * 4u;
+void vs_config_set(vs_config_t *c, const vs_config_field_t *f, unsigned k, double v)
+{
+	switch (f->type) {
+	case VS_CFG_DOUBLE:
+		AT(double) = v;
+		break;
+	case VS_CFG_U32:
+		AT(uint32_t) = (uint32_t)v;
+		break;
+	case VS_CFG_U16:
+		AT(uint16_t) = (uint16_t)v;
+		break;
+	case VS_CFG_BOOL:
+		AT(bool) = v != 0.0;
+		break;
+	default:
+		AT(vs_kinematics_t) = (vs_kinematics_t)(int)v;
+		break;
+	}
+}
+#undef AT
+#undef CAT
 
-	c->vel_limit_t_mm_s = 1000.0;
-	c->vel_limit_r_deg_s = 180.0;
-	c->acc_limit_t_mm_s2 = 1000.0;
-	c->acc_limit_r_deg_s2 = 360.0;
-	c->vel_default_t_mm_s = 500.0;
-	c->vel_default_r_deg_s = 90.0;
-	c->acc_default_t_mm_s2 = 500.0;
-	c->acc_default_r_deg_s2 = 180.0;
-	c->jog_timeout_default_ms = 500;
-
-	c->wheel_kp_per_s = 20.0;
-	for (unsigned i = 0; i < VS_MAX_AXES; i++)
-		c->drive_lag_ms[i] = 20.0;
-	c->following_error_mm = 50.0;
-	c->encoder_stuck_ms = 300;
-	c->drive_timeout_ms = 50;
-	c->loop_late_ms = 20;
-	c->link_timeout_ms = 1000;
-	c->position_window_mm = 0.05;
-	c->position_window_ms = 20;
-	c->settle_timeout_ms = 1000;
-
-	c->cruise_blend_mm = 200.0;
-	c->caution_vel_t_mm_s = 200.0;
-
-	c->battery_low_v = 22.0;
-	c->battery_critical_v = 20.0;
-
-	c->has_contact_sensor = true;
-	c->has_obstacle_input = true;
-	c->has_estop = true;
-	c->has_joystick = true;
-	c->joystick_deadband = 0.05;
-
-	c->firmware_version = NULL;
-
-	/* io.xml of the reference base: two inputs, two outputs. */
+/* io.xml of the reference base: two inputs, two outputs. */
+static void default_io(vs_config_t *c)
+{
 	static const struct {
 		uint32_t id;
 		uint8_t dir, width;
@@ -86,6 +107,22 @@ void vs_config_defaults(vs_config_t *c)
 	}
 }
 
+/* Reference differential base: 150 mm wheels, 400 mm track, 4096-line
+ * encoders read in quadrature, 24 V battery pack (the table's defaults). */
+void vs_config_defaults(vs_config_t *c)
+{
+	/* Field by field: the struct is large and firmware has no memset. The
+	 * rows expand to stores of constants, which a compiler can follow into
+	 * vs_config_check. */
+#define SET_DEFAULT(m, n, t, d, ...)                                                               \
+	for (unsigned k = 0; k < (n); k++)                                                         \
+		ELEM(c, m, t, k) = (VS_CFG_CTYPE_##t)(d);
+	VS_CONFIG_FIELDS(SET_DEFAULT)
+#undef SET_DEFAULT
+	c->firmware_version = NULL;
+	default_io(c);
+}
+
 static bool in_range(double x, double lo, double hi)
 {
 	return lo <= x && x <= hi;
@@ -97,131 +134,129 @@ static bool positive_upto(double x, double hi)
 	return x > 0.0 && x <= hi;
 }
 
-#define PI_D 3.14159265358979323846
+/* lo <= x <= hi, or lo < x <= hi when lo_excl (NaN fails). */
+static inline bool within(double x, double lo, double hi, bool lo_excl)
+{
+	return (lo_excl ? x > lo : x >= lo) && x <= hi;
+}
 
-#define FAIL(code, name)                                                                           \
-	do {                                                                                       \
-		if (field)                                                                         \
-			*field = (name);                                                           \
-		return (code);                                                                     \
-	} while (0)
+/* The first row with an element out of its range, or VS_CONFIG_NFIELDS.
+ * The rows expand to comparisons with constants. */
+static unsigned first_out_of_range(const vs_config_t *c)
+{
+#define IN_RANGE(m, n, t, d, lo, hi, ex, ...)                                                      \
+	for (unsigned k = 0; k < (n); k++)                                                         \
+		if (!within((double)CELEM(c, m, t, k), (lo), (hi), (ex)))                          \
+			return VS_CONFIG_ROW_##m;
+	VS_CONFIG_FIELDS(IN_RANGE)
+#undef IN_RANGE
+	return VS_CONFIG_NFIELDS;
+}
+
+#define ROW(m) VS_CONFIG_ROW_##m
+#define PI_D   3.14159265358979323846
+
+/* Names the field for a report: returns code. */
+static int report(const char **name, const char *field, int code)
+{
+	*name = field;
+	return code;
+}
+
+/* The rules between fields, each in its place in the order of the rows: a
+ * rule "at" row m (bad >= ROW(m)) is judged before m's own range, which it
+ * covers; one "after" m (bad > ROW(m)) once m is in range. bad is the first
+ * row out of range: a rule placed beyond it is not judged, that row is
+ * reported first. Returns -1 (out of range) or -2 (inconsistent) with the
+ * field, or 0. */
+static int cross_rules(const vs_config_t *c, unsigned bad, const char **name)
+{
+	if (bad > ROW(wheel_base_mm) && c->kinematics == VS_KIN_OMNI && !(c->wheel_base_mm >= 50.0))
+		return report(name, "wheel_base_mm", -1);
+	if (bad >= ROW(vel_default_t_mm_s) &&
+	    !positive_upto(c->vel_default_t_mm_s, c->vel_limit_t_mm_s))
+		return report(name, "vel_default_t_mm_s", -2);
+	if (bad >= ROW(vel_default_r_deg_s) &&
+	    !positive_upto(c->vel_default_r_deg_s, c->vel_limit_r_deg_s))
+		return report(name, "vel_default_r_deg_s", -2);
+	if (bad >= ROW(acc_default_t_mm_s2) &&
+	    !positive_upto(c->acc_default_t_mm_s2, c->acc_limit_t_mm_s2))
+		return report(name, "acc_default_t_mm_s2", -2);
+	if (bad >= ROW(acc_default_r_deg_s2) &&
+	    !positive_upto(c->acc_default_r_deg_s2, c->acc_limit_r_deg_s2))
+		return report(name, "acc_default_r_deg_s2", -2);
+	/* Per-tick loop gain at most 1/4 keeps the discrete loop well damped. */
+	if (bad > ROW(wheel_kp_per_s) && c->wheel_kp_per_s * 4.0 > (double)c->tick_hz)
+		return report(name, "wheel_kp_per_s", -2);
+	if (bad >= ROW(caution_vel_t_mm_s) &&
+	    !in_range(c->caution_vel_t_mm_s, 0.0, c->vel_limit_t_mm_s))
+		return report(name, "caution_vel_t_mm_s", -2);
+	if (bad > ROW(battery_low_v) && !(c->battery_low_v > c->battery_critical_v))
+		return report(name, "battery_low_v", -2);
+	return 0;
+}
+
+/* The fastest wheel setpoint (counts/s, Q8, plus the same again for the
+ * position loop's correction) must fit the HAL's int32. */
+static bool setpoint_fits(const vs_config_t *c)
+{
+	bool omni = c->kinematics == VS_KIN_OMNI;
+	double counts_per_mm = (double)c->encoder_counts_per_rev / (PI_D * c->wheel_diameter_mm);
+	double half = omni ? (c->wheel_base_mm + c->track_width_mm) / 2.0 : c->track_width_mm / 2.0;
+	double wheel_mm_s =
+	    c->vel_limit_t_mm_s * (omni ? 2.0 : 1.0) + c->vel_limit_r_deg_s * half * PI_D / 180.0;
+	return !(wheel_mm_s * counts_per_mm * 256.0 * 2.0 > 2147483647.0);
+}
+
+/* The io.xml entries: 0, or -3 with the field. */
+static int check_io(const vs_config_t *c, const char **name)
+{
+	for (unsigned i = 0; i < c->num_io; i++) {
+		const vs_io_def_t *d = &c->io[i];
+		bool terminated = false;
+		if (d->id == 0)
+			return report(name, "io.id", -3);
+		if (d->dir != VS_IO_IN && d->dir != VS_IO_OUT)
+			return report(name, "io.dir", -3);
+		if (d->width < 1 || d->width > 32)
+			return report(name, "io.width", -3);
+		for (unsigned k = 0; k < VS_IO_NAME_MAX; k++)
+			terminated = terminated || d->name[k] == '\0';
+		if (!terminated)
+			return report(name, "io.name", -3);
+		for (unsigned j = 0; j < i; j++)
+			if (c->io[j].id == d->id)
+				return report(name, "io.id", -3);
+	}
+	return 0;
+}
 
 /* Return codes: -1 a field out of its range, -2 two fields inconsistent,
- * -3 an io.xml entry invalid or duplicated. */
+ * -3 an io.xml entry invalid or duplicated. The table's ranges, with the
+ * rules between fields in their places (cross_rules), then the version
+ * string, the setpoint range and io.xml. */
 int vs_config_check(const vs_config_t *c, const char **field)
 {
-	if (c->kinematics != VS_KIN_DIFF && c->kinematics != VS_KIN_OMNI)
-		FAIL(-1, "kinematics");
-	if (c->tick_hz < 100 || c->tick_hz > 10000)
-		FAIL(-1, "tick_hz");
+	unsigned bad = first_out_of_range(c);
+	const char *name = NULL;
+	int rc = cross_rules(c, bad, &name);
 
-	if (!in_range(c->wheel_diameter_mm, 10.0, 2000.0))
-		FAIL(-1, "wheel_diameter_mm");
-	if (!in_range(c->track_width_mm, 50.0, 5000.0))
-		FAIL(-1, "track_width_mm");
-	if (c->kinematics == VS_KIN_OMNI ? !in_range(c->wheel_base_mm, 50.0, 5000.0)
-					 : !in_range(c->wheel_base_mm, 0.0, 5000.0))
-		FAIL(-1, "wheel_base_mm");
-	if (c->encoder_counts_per_rev < 1 || c->encoder_counts_per_rev > (1u << 24))
-		FAIL(-1, "encoder_counts_per_rev");
-
-	if (!positive_upto(c->vel_limit_t_mm_s, 10000.0))
-		FAIL(-1, "vel_limit_t_mm_s");
-	if (!positive_upto(c->vel_limit_r_deg_s, 3600.0))
-		FAIL(-1, "vel_limit_r_deg_s");
-	if (!positive_upto(c->acc_limit_t_mm_s2, 100000.0))
-		FAIL(-1, "acc_limit_t_mm_s2");
-	if (!positive_upto(c->acc_limit_r_deg_s2, 100000.0))
-		FAIL(-1, "acc_limit_r_deg_s2");
-	if (!positive_upto(c->vel_default_t_mm_s, c->vel_limit_t_mm_s))
-		FAIL(-2, "vel_default_t_mm_s");
-	if (!positive_upto(c->vel_default_r_deg_s, c->vel_limit_r_deg_s))
-		FAIL(-2, "vel_default_r_deg_s");
-	if (!positive_upto(c->acc_default_t_mm_s2, c->acc_limit_t_mm_s2))
-		FAIL(-2, "acc_default_t_mm_s2");
-	if (!positive_upto(c->acc_default_r_deg_s2, c->acc_limit_r_deg_s2))
-		FAIL(-2, "acc_default_r_deg_s2");
-	/* setJogTimeout takes a short. */
-	if (c->jog_timeout_default_ms < 1 || c->jog_timeout_default_ms > 32767)
-		FAIL(-1, "jog_timeout_default_ms");
-
-	if (!positive_upto(c->wheel_kp_per_s, 1000.0))
-		FAIL(-1, "wheel_kp_per_s");
-	/* Per-tick loop gain at most 1/4 keeps the discrete loop well damped. */
-	if (c->wheel_kp_per_s * 4.0 > (double)c->tick_hz)
-		FAIL(-2, "wheel_kp_per_s");
-	for (unsigned i = 0; i < VS_MAX_AXES; i++)
-		if (!in_range(c->drive_lag_ms[i], 0.0, 1000.0))
-			FAIL(-1, "drive_lag_ms");
-	if (!positive_upto(c->following_error_mm, 10000.0))
-		FAIL(-1, "following_error_mm");
-	if (c->encoder_stuck_ms < 10 || c->encoder_stuck_ms > 60000)
-		FAIL(-1, "encoder_stuck_ms");
-	if (c->drive_timeout_ms < 1 || c->drive_timeout_ms > 60000)
-		FAIL(-1, "drive_timeout_ms");
-	if (c->loop_late_ms < 1 || c->loop_late_ms > 1000)
-		FAIL(-1, "loop_late_ms");
-	if (c->link_timeout_ms > 60000)
-		FAIL(-1, "link_timeout_ms");
-	if (!positive_upto(c->position_window_mm, 100.0))
-		FAIL(-1, "position_window_mm");
-	if (c->position_window_ms > 1000)
-		FAIL(-1, "position_window_ms");
-	if (c->settle_timeout_ms < 10 || c->settle_timeout_ms > 60000)
-		FAIL(-1, "settle_timeout_ms");
-
-	if (!in_range(c->cruise_blend_mm, 0.0, 10000.0))
-		FAIL(-1, "cruise_blend_mm");
-	if (!in_range(c->caution_vel_t_mm_s, 0.0, c->vel_limit_t_mm_s))
-		FAIL(-2, "caution_vel_t_mm_s");
-
-	if (!positive_upto(c->battery_critical_v, 1000.0))
-		FAIL(-1, "battery_critical_v");
-	if (!in_range(c->battery_low_v, 0.0, 1000.0))
-		FAIL(-1, "battery_low_v");
-	if (!(c->battery_low_v > c->battery_critical_v))
-		FAIL(-2, "battery_low_v");
-
-	if (!in_range(c->joystick_deadband, 0.0, 0.5))
-		FAIL(-1, "joystick_deadband");
-
-	if (c->firmware_version) {
+	if (rc == 0 && bad < VS_CONFIG_NFIELDS)
+		rc = report(&name, vs_config_fields[bad].name, -1);
+	if (rc == 0 && c->firmware_version) {
 		unsigned k = 0;
 		while (k < 32 && c->firmware_version[k] != '\0')
 			k++;
 		if (k == 0 || k >= 32)
-			FAIL(-1, "firmware_version");
+			rc = report(&name, "firmware_version", -1);
 	}
-
-	/* The fastest wheel setpoint (counts/s, Q8, plus the same again for
-	 * the position loop's correction) must fit the HAL's int32. */
-	double counts_per_mm = (double)c->encoder_counts_per_rev / (PI_D * c->wheel_diameter_mm);
-	double half = c->kinematics == VS_KIN_OMNI ? (c->wheel_base_mm + c->track_width_mm) / 2.0
-						   : c->track_width_mm / 2.0;
-	double wheel_mm_s = c->vel_limit_t_mm_s * (c->kinematics == VS_KIN_OMNI ? 2.0 : 1.0) +
-			    c->vel_limit_r_deg_s * half * PI_D / 180.0;
-	if (wheel_mm_s * counts_per_mm * 256.0 * 2.0 > 2147483647.0)
-		FAIL(-2, "encoder_counts_per_rev");
-
-	if (c->num_io > VS_MAX_IO)
-		FAIL(-1, "num_io");
-	for (unsigned i = 0; i < c->num_io; i++) {
-		const vs_io_def_t *d = &c->io[i];
-		if (d->id == 0)
-			FAIL(-3, "io.id");
-		if (d->dir != VS_IO_IN && d->dir != VS_IO_OUT)
-			FAIL(-3, "io.dir");
-		if (d->width < 1 || d->width > 32)
-			FAIL(-3, "io.width");
-		bool terminated = false;
-		for (unsigned k = 0; k < VS_IO_NAME_MAX; k++)
-			terminated = terminated || d->name[k] == '\0';
-		if (!terminated)
-			FAIL(-3, "io.name");
-		for (unsigned j = 0; j < i; j++) {
-			if (c->io[j].id == d->id)
-				FAIL(-3, "io.id");
-		}
-	}
-	return 0;
+	if (rc == 0 && !setpoint_fits(c))
+		rc = report(&name, "encoder_counts_per_rev", -2);
+	if (rc == 0 && c->num_io > VS_MAX_IO)
+		rc = report(&name, "num_io", -1);
+	if (rc == 0)
+		rc = check_io(c, &name);
+	if (rc != 0 && field)
+		*field = name;
+	return rc;
 }

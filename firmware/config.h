@@ -1,7 +1,7 @@
 /* Vehicle configuration handed to the firmware at init.
  *
- * Filled outside firmware/ (the XML loader in host_sim/, or a board's
- * constant table) in physical units; vehicle_init() validates it again and
+ * Filled outside firmware/ (the XML loader in hal/posix/, or a board's
+ * own code from vs_config_defaults()) in physical units; vehicle_init() validates it again and
  * converts it once to the fixed-point parameters the tick uses.
  */
 #ifndef VS_CONFIG_H
@@ -87,6 +87,44 @@ typedef struct {
 	uint8_t num_io;
 	vs_io_def_t io[VS_MAX_IO];
 } vs_config_t;
+
+/* The fields with a default, a range and an XML attribute: one table
+ * (config_fields.def), from which the firmware keeps what it needs. */
+#include "config_fields.def"
+
+/* C type of a row's member. */
+typedef enum {
+	VS_CFG_DOUBLE = 0,
+	VS_CFG_U32 = 1,
+	VS_CFG_U16 = 2,
+	VS_CFG_BOOL = 3,
+	VS_CFG_KIN = 4, /* vs_kinematics_t */
+} vs_config_type_t;
+
+/* One row of the table as the firmware keeps it for readers of a running
+ * configuration (the console's $config): no range, no XML columns.
+ * vs_config_defaults and vs_config_check are generated from the rows. */
+typedef struct {
+	const char *name; /* the member's name */
+	uint16_t off;	  /* offsetof(vs_config_t, member) */
+	uint8_t type;	  /* vs_config_type_t */
+	uint8_t n;	  /* elements: 1, or the array's length */
+} vs_config_field_t;
+
+/* Row indexes, VS_CONFIG_ROW_<member>, in the table's order. */
+enum {
+#define VS_CONFIG_ROW_INDEX(m, ...) VS_CONFIG_ROW_##m,
+	VS_CONFIG_FIELDS(VS_CONFIG_ROW_INDEX)
+#undef VS_CONFIG_ROW_INDEX
+	    VS_CONFIG_NFIELDS
+};
+
+extern const vs_config_field_t vs_config_fields[VS_CONFIG_NFIELDS];
+
+/* Element k (< f->n) of row f's member, as a double (a boolean 0 or 1). */
+double vs_config_get(const vs_config_t *c, const vs_config_field_t *f, unsigned k);
+/* Stores v, converted to the member's type, in element k of row f. */
+void vs_config_set(vs_config_t *c, const vs_config_field_t *f, unsigned k, double v);
 
 /* Number of wheel axes for a kinematics type. */
 static inline uint8_t vs_config_axes(const vs_config_t *c)

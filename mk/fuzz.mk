@@ -20,7 +20,10 @@ FUZZ_BUILD := $(BUILD)/fuzz
 FUZZ_SAN := -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
 FUZZ_CFLAGS := -std=c11 -g -O1 -I. -D_GNU_SOURCE -MMD -MP $(FUZZ_SAN) -fsanitize=fuzzer-no-link \
 	-Wall -Wextra
-FUZZ_SUT_SRC := $(FW_SRC) $(PROTO_SRC) $(HOST_SRC) $(SIM_SRC)
+# hal/linux/backend_cfg.c: the <backends> section's handler, read by the same
+# reader as the rest of the vehicle file (fuzz_config).
+FUZZ_SUT_SRC := $(FW_SRC) $(PROTO_SRC) $(HOST_SRC) $(SIM_SRC) hal/linux/backend_cfg.c
+FUZZ_EVDEV := -I/usr/include/libevdev-1.0
 FUZZ_ALL := $(patsubst tests/fuzz/%.c,%,$(wildcard tests/fuzz/fuzz_*.c))
 FUZZ_TARGETS ?= $(FUZZ_ALL)
 FUZZ_BINS := $(addprefix $(FUZZ_BUILD)/,$(FUZZ_ALL))
@@ -37,7 +40,8 @@ FORCE:
 $(FUZZ_BUILD)/obj/%.o: %.c
 	@mkdir -p $(dir $@)
 	@$(if $(Q),echo "  FUZZCC  $<")
-	$(Q)$(FUZZ_CC) $(FUZZ_CFLAGS) $(if $(filter tests/fuzz/%,$<),-Werror) -c $< -o $@
+	$(Q)$(FUZZ_CC) $(FUZZ_CFLAGS) $(if $(filter tests/fuzz/%,$<),-Werror) \
+		$(if $(filter hal/linux/%,$<),$(FUZZ_EVDEV)) -c $< -o $@
 
 $(FUZZ_BUILD)/libsut.a: $(patsubst %.c,$(FUZZ_BUILD)/obj/%.o,$(FUZZ_SUT_SRC))
 	@$(if $(Q),echo "  AR      $@")
@@ -45,7 +49,7 @@ $(FUZZ_BUILD)/libsut.a: $(patsubst %.c,$(FUZZ_BUILD)/obj/%.o,$(FUZZ_SUT_SRC))
 
 $(FUZZ_BUILD)/fuzz_%: $(FUZZ_BUILD)/obj/tests/fuzz/fuzz_%.o $(FUZZ_BUILD)/libsut.a
 	@$(if $(Q),echo "  LD      $@")
-	$(Q)$(FUZZ_CC) $(FUZZ_SAN) -fsanitize=fuzzer -o $@ $^ $(LDLIBS_HOST)
+	$(Q)$(FUZZ_CC) $(FUZZ_SAN) -fsanitize=fuzzer -o $@ $^ $(LDLIBS_HOST) -levdev
 
 fuzz-build: $(FUZZ_BINS)
 

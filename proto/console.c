@@ -347,6 +347,55 @@ static void rb_signature(rbuf_t *r, const cmd_def_t *d)
 	rb_puts(r, ")");
 }
 
+/* "ok" and " NAME" for every row of the configuration table: the list of
+ * $config fits one reply (a char per byte of " NAME", as the NUL of #m). */
+struct config_list_bytes {
+#define CONFIG_NAME_BYTES(m, ...) char m[sizeof(#m)];
+	VS_CONFIG_FIELDS(CONFIG_NAME_BYTES)
+#undef CONFIG_NAME_BYTES
+};
+_Static_assert(2 + sizeof(struct config_list_bytes) <= CONSOLE_REPLY_MAX,
+	       "$config's list fits one reply");
+
+/* $config [NAME]: the names of the configuration's fields, or one field's
+ * value in the running configuration, each element of an array in turn, in
+ * the formats of the operations' replies. */
+static bool exec_config(console_t *c, char **argv, unsigned ntok, rbuf_t *r)
+{
+	const vs_config_field_t *f = vs_config_fields;
+
+	if (ntok > 2)
+		return reply_error(c, r, "%d $config takes 0 or 1 argument, got %u",
+				   CONSOLE_E_ARITY, ntok - 1);
+	if (ntok == 1) {
+		rb_puts(r, "ok");
+		for (; f < vs_config_fields + VS_CONFIG_NFIELDS; f++) {
+			rb_puts(r, " ");
+			rb_puts(r, f->name);
+		}
+		return true;
+	}
+	while (f < vs_config_fields + VS_CONFIG_NFIELDS && !np_streq_nocase(argv[1], f->name))
+		f++;
+	if (f == vs_config_fields + VS_CONFIG_NFIELDS)
+		return reply_error(c, r, "%d $config: no field %s", CONSOLE_E_EXTRA, argv[1]);
+	rb_puts(r, "ok ");
+	rb_puts(r, f->name);
+	for (unsigned k = 0; k < f->n; k++) {
+		double v = vs_config_get(&c->v->cfg, f, k);
+
+		if (f->type == VS_CFG_DOUBLE) {
+			rb_puts(r, " ");
+			rb_double(r, v);
+		} else if (f->type == VS_CFG_BOOL) {
+			rb_puts(r, v != 0.0 ? " true" : " false");
+		} else {
+			rb_printf(r, " %lu", (unsigned long)v);
+		}
+	}
+	return true;
+}
+
 static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_t *r)
 {
 	const char *cmd = argv[0];
@@ -374,6 +423,8 @@ static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_
 		return reply_error(c, r, "%d $help takes 0 or 1 argument, got %u", CONSOLE_E_ARITY,
 				   ntok - 1);
 	}
+	if (np_streq_nocase(cmd, "$config"))
+		return exec_config(c, argv, ntok, r);
 	if (np_streq_nocase(cmd, "$watchdog")) {
 		/* The link watchdog's timeout: read, or set for this run (0 =
 		 * off; hands-on bring-up, a lockstep harness). */

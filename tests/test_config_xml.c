@@ -5,7 +5,10 @@
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include <cmocka.h>
 
@@ -259,6 +262,244 @@ static void error_buffer_bounded(void **state)
 	assert_int_equal(config_load("tests/data/bad_number.xml", NULL, &c, NULL, NULL, 0), -1);
 }
 
+/* ---- a section of another reader (config_section_t) ----------------------- */
+
+typedef struct {
+	char log[512];
+	bool fail_finish;
+} sec_log_t;
+
+static int log_start(void *ctx, config_reader_t *r, const char *elem, const char **atts, int depth,
+		     unsigned long line)
+{
+	sec_log_t *l = ctx;
+	size_t n = strlen(l->log);
+	snprintf(l->log + n, sizeof(l->log) - n, "<%s %d %lu>", elem, depth, line);
+	for (; atts[0]; atts += 2) {
+		uint32_t u;
+		double d;
+		bool b;
+		if (!strcmp(atts[0], "u") &&
+		    config_attr_uint(r, line, elem, atts[0], atts[1], 0, 5, &u))
+			return -1;
+		if (!strcmp(atts[0], "d") && config_attr_number(r, line, elem, atts[0], atts[1],
+								0.0, true, 1.0, "(0, 1]", &d))
+			return -1;
+		if (!strcmp(atts[0], "b") && config_attr_bool(r, line, elem, atts[0], atts[1], &b))
+			return -1;
+		if (!strcmp(atts[0], "x"))
+			return config_fail(r, line, "%s.x: said no '%s'", elem, atts[1]);
+	}
+	return 0;
+}
+
+static void log_end(void *ctx, const char *elem, int depth)
+{
+	sec_log_t *l = ctx;
+	size_t n = strlen(l->log);
+	snprintf(l->log + n, sizeof(l->log) - n, "</%s %d>", elem, depth);
+}
+
+static int log_finish(void *ctx, config_reader_t *r)
+{
+	sec_log_t *l = ctx;
+	return l->fail_finish ? config_fail(r, 2, "extra: finish said no") : 0;
+}
+
+static char sec_path[64];
+static void write_text(const char *text);
+
+/* The vehicle file from text at sec_path; loaded with the <extra> section
+ * (vehicle: judged with it, NULL: the section alone). Returns the result. */
+static int load_extra(const char *text, sec_log_t *l, vs_config_t *c, char *err, size_t cap)
+{
+	write_text(text);
+	const config_section_t sec = {
+	    .name = "extra", .start = log_start, .end = log_end, .finish = log_finish, .ctx = l};
+	l->log[0] = '\0';
+	return config_load_sections(sec_path, NULL, c, NULL, &sec, 1, err, cap);
+}
+
+static void expect_extra(const char *text, vs_config_t *c, bool fail_finish, int line,
+			 const char *msg)
+{
+	sec_log_t l = {.fail_finish = fail_finish};
+	char err[256] = "", want[256];
+	assert_int_equal(load_extra(text, &l, c, err, sizeof(err)), -1);
+	snprintf(want, sizeof(want), "%s:%d: %s", sec_path, line, msg);
+	assert_string_equal(err, want);
+}
+
+static int sec_setup(void **state)
+{
+	(void)state;
+	snprintf(sec_path, sizeof(sec_path), "/tmp/vs_config_sections_XXXXXX");
+	int fd = mkstemp(sec_path);
+	assert_true(fd >= 0);
+	close(fd);
+	return 0;
+}
+
+static int sec_teardown(void **state)
+{
+	(void)state;
+	unlink(sec_path);
+	return 0;
+}
+
+static void sections_one_pass(void **state)
+{
+	(void)state;
+	vs_config_t c;
+	sec_log_t l = {.fail_finish = false};
+	char err[256] = "x";
+	static const char ok[] = "<vehicle tick_hz=\"500\">\n"
+				 "  <extra u=\"3\" d=\"0.5\">\n"
+				 "    <item b=\"true\"><sub/></item>\n"
+				 "    <item/>\n"
+				 "  </extra>\n"
+				 "  <limits vel_t_mm_s=\"900\"/>\n"
+				 "</vehicle>\n";
+	assert_int_equal(load_extra(ok, &l, &c, err, sizeof(err)), 0);
+	assert_string_equal(err, "");
+	assert_string_equal(l.log, "<extra 0 2><item 1 3><sub 2 3></sub 2></item 1><item 1 4>"
+				   "</item 1></extra 0>");
+	assert_int_equal(c.tick_hz, 500);
+	assert_true(c.vel_limit_t_mm_s == 900.0);
+	/* the section alone: the same elements */
+	assert_int_equal(load_extra(ok, &l, NULL, err, sizeof(err)), 0);
+	assert_string_equal(l.log, "<extra 0 2><item 1 3><sub 2 3></sub 2></item 1><item 1 4>"
+				   "</item 1></extra 0>");
+	/* the same file without the handler: an unknown element */
+	assert_int_equal(config_load(sec_path, NULL, &c, NULL, err, sizeof(err)), -1);
+	char want[256];
+	snprintf(want, sizeof(want), "%s:2: extra: unknown element", sec_path);
+	assert_string_equal(err, want);
+}
+
+static void sections_errors(void **state)
+{
+	(void)state;
+	vs_config_t c;
+	/* the helpers' messages, always with the line */
+	expect_extra("<vehicle>\n<extra u=\"6\"/>\n</vehicle>\n", &c, false, 2,
+		     "extra.u: out of range 0..5 '6'");
+	expect_extra("<vehicle>\n<extra>\n<i u=\"+1\"/></extra>\n</vehicle>\n", &c, false, 3,
+		     "i.u: not a number '+1'");
+	expect_extra("<vehicle>\n<extra d=\"0\"/>\n</vehicle>\n", &c, false, 2,
+		     "extra.d: out of range (0, 1] '0'");
+	expect_extra("<vehicle>\n<extra d=\"inf\"/>\n</vehicle>\n", &c, false, 2,
+		     "extra.d: not finite 'inf'");
+	expect_extra("<vehicle>\n<extra b=\"yes\"/>\n</vehicle>\n", &c, false, 2,
+		     "extra.b: not a boolean 'yes'");
+	expect_extra("<vehicle>\n<extra/>\n</vehicle>\n", &c, true, 2, "extra: finish said no");
+	/* the core's error first, wherever it is in the file */
+	static const char both[] = "<vehicle>\n<extra x=\"1\"/>\n<limits vel_t_mm_s=\"abc\"/>\n"
+				   "</vehicle>\n";
+	expect_extra(both, &c, false, 3, "limits.vel_t_mm_s: not a number 'abc'");
+	expect_extra(both, NULL, false, 2, "extra.x: said no '1'");
+	/* ... and vs_config_check's */
+	expect_extra("<vehicle>\n<extra x=\"1\"/>\n<defaults vel_t_mm_s=\"1500\"/>\n</vehicle>\n",
+		     &c, false, 3, "defaults.vel_t_mm_s: rejected by the configuration check");
+	/* the first of two section errors; a section appears once */
+	expect_extra("<vehicle>\n<extra x=\"1\"/>\n<extra x=\"2\"/>\n</vehicle>\n", NULL, false, 2,
+		     "extra.x: said no '1'");
+	expect_extra("<vehicle>\n<extra/>\n<extra/>\n</vehicle>\n", &c, false, 3,
+		     "extra: duplicate element (first at line 2)");
+	/* not well-formed: the section's error too when it is read alone */
+	expect_extra("<vehicle>\n<extra>\n</vehicle>\n", NULL, false, 3, "xml: mismatched tag");
+	/* a file that cannot be read is an error for the section alone too */
+	sec_log_t l;
+	char err[256];
+	assert_int_equal(config_load_sections(
+			     "tests/data/no_such_file.xml", NULL, NULL, NULL,
+			     &(config_section_t){.name = "extra", .start = log_start, .ctx = &l}, 1,
+			     err, sizeof(err)),
+			 -1);
+	assert_string_equal(err, "tests/data/no_such_file.xml: cannot open: No such file or "
+				 "directory");
+}
+
+/* The vehicle file text at sec_path. */
+static void write_text(const char *text)
+{
+	FILE *f = fopen(sec_path, "w");
+	assert_non_null(f);
+	fputs(text, f);
+	fclose(f);
+}
+
+/* One table: every row's attribute in the file reaches its member (each
+ * element of an array by its index), or vs_config_check's complaint about
+ * the value names that very attribute. */
+static void every_row_has_its_attribute(void **state)
+{
+	(void)state;
+	static const struct {
+		const char *elem, *attr;
+	} xml[] = {
+#define XML_COLUMNS(m, n, t, d, lo, hi, ex, el, at) {el, at},
+	    VS_CONFIG_FIELDS(XML_COLUMNS)
+#undef XML_COLUMNS
+	};
+	vs_config_t def, c;
+	vs_config_defaults(&def);
+	for (unsigned i = 0; i < VS_CONFIG_NFIELDS; i++) {
+		const vs_config_field_t *f = &vs_config_fields[i];
+		for (unsigned k = 0; k < f->n; k++) {
+			double d = vs_config_get(&def, f, k), v = d > 0 ? d / 2 : d + 10;
+			char attr[64], val[40], text[512], err[256], want[512];
+			const char *hash = strchr(xml[i].attr, '#');
+			if (hash)
+				snprintf(attr, sizeof(attr), "%.*s%u%s", (int)(hash - xml[i].attr),
+					 xml[i].attr, k, hash + 1);
+			else
+				snprintf(attr, sizeof(attr), "%s", xml[i].attr);
+			if (f->type == VS_CFG_BOOL || f->type == VS_CFG_KIN)
+				v = d == 0.0;
+			if (f->type == VS_CFG_BOOL)
+				snprintf(val, sizeof(val), "%s", v ? "true" : "false");
+			else if (f->type == VS_CFG_KIN)
+				snprintf(val, sizeof(val), "%s", v ? "mecanum" : "differential");
+			else
+				snprintf(val, sizeof(val), "%.17g",
+					 f->type == VS_CFG_DOUBLE ? v : (v = (double)(long)v));
+			/* a wheel base a mecanum base accepts, unless that is the row */
+			const char *base = strcmp(xml[i].elem, "geometry")
+					       ? "<geometry wheel_base_mm=\"100\"/>"
+					       : "";
+			if (!strcmp(xml[i].elem, "vehicle"))
+				snprintf(text, sizeof(text), "<vehicle %s=\"%s\">%s</vehicle>\n",
+					 attr, val, base);
+			else
+				snprintf(text, sizeof(text),
+					 "<vehicle><%s %s=\"%s\"/>%s</vehicle>\n", xml[i].elem,
+					 attr, val, base);
+			write_text(text);
+			if (config_load(sec_path, NULL, &c, NULL, err, sizeof(err)) == 0) {
+				assert_true(vs_config_get(&c, f, k) == v);
+				continue;
+			}
+			snprintf(want, sizeof(want),
+				 "%s:1: %s.%s: rejected by the configuration check", sec_path,
+				 xml[i].elem, attr);
+			assert_string_equal(err, want);
+		}
+	}
+	/* an array's index: one digit below its length */
+	static const char *const bad[] = {"axis4_lag_ms", "axis_lag_ms", "axis01_lag_ms",
+					  "axisx_lag_ms"};
+	for (unsigned i = 0; i < sizeof(bad) / sizeof(bad[0]); i++) {
+		char text[256], err[256], want[512];
+		snprintf(text, sizeof(text), "<vehicle>\n<drives %s=\"5\"/>\n</vehicle>\n", bad[i]);
+		write_text(text);
+		assert_int_equal(config_load(sec_path, NULL, &c, NULL, err, sizeof(err)), -1);
+		snprintf(want, sizeof(want), "%s:2: drives.%s: unknown attribute", sec_path,
+			 bad[i]);
+		assert_string_equal(err, want);
+	}
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -276,6 +517,9 @@ int main(void)
 	    cmocka_unit_test(error_out_of_range),
 	    cmocka_unit_test(error_io_ids),
 	    cmocka_unit_test(error_buffer_bounded),
+	    cmocka_unit_test_setup_teardown(sections_one_pass, sec_setup, sec_teardown),
+	    cmocka_unit_test_setup_teardown(sections_errors, sec_setup, sec_teardown),
+	    cmocka_unit_test_setup_teardown(every_row_has_its_attribute, sec_setup, sec_teardown),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -730,6 +730,56 @@ static void test_version_and_diag(void **state)
 	EXPECT("getActiveAlarm 1", "ok true 0 0");
 }
 
+/* $config: the table's names, and the running configuration's values in
+ * the formats of the operations' replies (fake_hal_config: the reference
+ * base with drives that follow at once). */
+static void test_config(void **state)
+{
+	(void)state;
+	EXPECT("$config",
+	       "ok kinematics tick_hz wheel_diameter_mm track_width_mm wheel_base_mm "
+	       "encoder_counts_per_rev vel_limit_t_mm_s vel_limit_r_deg_s acc_limit_t_mm_s2 "
+	       "acc_limit_r_deg_s2 vel_default_t_mm_s vel_default_r_deg_s acc_default_t_mm_s2 "
+	       "acc_default_r_deg_s2 jog_timeout_default_ms wheel_kp_per_s drive_lag_ms "
+	       "following_error_mm encoder_stuck_ms drive_timeout_ms loop_late_ms link_timeout_ms "
+	       "position_window_mm position_window_ms settle_timeout_ms cruise_blend_mm "
+	       "caution_vel_t_mm_s battery_critical_v battery_low_v has_contact_sensor "
+	       "has_obstacle_input has_estop has_joystick joystick_deadband");
+	EXPECT("$config kinematics", "ok kinematics 0");
+	EXPECT("$config tick_hz", "ok tick_hz 1000");
+	EXPECT("$config wheel_diameter_mm", "ok wheel_diameter_mm 150.000");
+	EXPECT("$config encoder_counts_per_rev", "ok encoder_counts_per_rev 16384");
+	EXPECT("$config jog_timeout_default_ms", "ok jog_timeout_default_ms 500");
+	EXPECT("$config drive_lag_ms", "ok drive_lag_ms 0.000 0.000 0.000 0.000");
+	EXPECT("$config position_window_mm", "ok position_window_mm 0.050");
+	EXPECT("$config battery_low_v", "ok battery_low_v 22.000");
+	EXPECT("$config has_estop", "ok has_estop true");
+	EXPECT("$CONFIG Joystick_Deadband", "ok joystick_deadband 0.050");
+	/* the running configuration: what $watchdog set, what init kept */
+	EXPECT("$watchdog 250", "ok watchdog 250");
+	EXPECT("$config link_timeout_ms", "ok link_timeout_ms 250");
+	veh.cfg.has_joystick = false;
+	veh.cfg.kinematics = VS_KIN_OMNI;
+	EXPECT("$config has_joystick", "ok has_joystick false");
+	EXPECT("$config kinematics", "ok kinematics 1");
+	/* every row answers, with one value per element */
+	for (unsigned i = 0; i < VS_CONFIG_NFIELDS; i++) {
+		char line[64], want[64];
+		snprintf(line, sizeof(line), "$config %s", vs_config_fields[i].name);
+		snprintf(want, sizeof(want), "ok %s ", vs_config_fields[i].name);
+		assert_memory_equal(ex(line), want, strlen(want));
+		unsigned spaces = 0;
+		for (const char *p = rep; *p; p++)
+			spaces += *p == ' ';
+		assert_int_equal(spaces, 1 + vs_config_fields[i].n);
+	}
+	EXPECT("$config nosuch", "error 8 $config: no field nosuch");
+	EXPECT("$config firmware_version", "error 8 $config: no field firmware_version");
+	EXPECT("$config tick_hz 1", "error 2 $config takes 0 or 1 argument, got 2");
+	/* extras never raise alarms */
+	EXPECT("getActiveAlarm 1", "ok true 0 0");
+}
+
 static int extra_calls;
 static bool test_extra(void *ctx, int argc, char **argv, char *reply, size_t cap)
 {
@@ -789,6 +839,7 @@ int main(void)
 	    cmocka_unit_test_setup(test_longest_reply_bounded, setup),
 	    cmocka_unit_test_setup(test_help, setup),
 	    cmocka_unit_test_setup(test_version_and_diag, setup),
+	    cmocka_unit_test_setup(test_config, setup),
 	    cmocka_unit_test_setup(test_extra_handler, setup),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);

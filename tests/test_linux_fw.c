@@ -342,6 +342,58 @@ static void test_backends_errors(void **state)
 	assert_string_equal(err, want);
 }
 
+/* One pass over the file for both: the core configuration's error comes
+ * first (as config_load then backend_cfg_load reported it), even after an
+ * error of <backends> in the file; <backends> read alone reports its own. */
+static void test_backends_one_pass(void **state)
+{
+	(void)state;
+	static const char body[] = VEHICLE_HEAD "  <backends>\n"
+						"    <power settle_ms=\"%s\"/>\n"
+						"  </backends>\n"
+						"  <limits vel_t_mm_s=\"%s\"/>\n"
+						"</vehicle>\n";
+	char text[1024], want[700], err[256];
+	vs_config_t cfg;
+	hal_io_map_t io;
+	backend_cfg_t b;
+
+	snprintf(text, sizeof(text), body, "51", "abc");
+	fw_write_file(FW_VPATH, text);
+	assert_int_equal(backend_cfg_load_all(FW_VPATH, NULL, &cfg, &io, &b, err, sizeof(err)), -1);
+	snprintf(want, sizeof(want), "%s:7: limits.vel_t_mm_s: not a number 'abc'", FW_VPATH);
+	assert_string_equal(err, want);
+	assert_int_equal(backend_cfg_load(FW_VPATH, &b, err, sizeof(err)), -1);
+	snprintf(want, sizeof(want), "%s:5: power.settle_ms: out of range 0..50 '51'", FW_VPATH);
+	assert_string_equal(err, want);
+
+	/* the core fine: the backends' error */
+	snprintf(text, sizeof(text), body, "51", "900");
+	fw_write_file(FW_VPATH, text);
+	assert_int_equal(backend_cfg_load_all(FW_VPATH, NULL, &cfg, &io, &b, err, sizeof(err)), -1);
+	assert_string_equal(err, want);
+
+	/* both fine: both filled, io.xml too */
+	snprintf(text, sizeof(text), body, "35", "900");
+	fw_write_file(FW_VPATH, text);
+	assert_int_equal(
+	    backend_cfg_load_all(FW_VPATH, "config/io.xml", &cfg, &io, &b, err, sizeof(err)), 0);
+	assert_string_equal(err, "");
+	assert_int_equal(cfg.tick_hz, 100);
+	assert_true(cfg.vel_limit_t_mm_s == 900.0);
+	assert_int_equal(io.n, 8);
+	assert_int_equal(b.settle_ms, 35);
+
+	/* io.xml's error, like the rest of the core's, before the backends' */
+	snprintf(text, sizeof(text), body, "51", "900");
+	fw_write_file(FW_VPATH, text);
+	assert_int_equal(backend_cfg_load_all(FW_VPATH, "tests/data/io_width.xml", &cfg, &io, &b,
+					      err, sizeof(err)),
+			 -1);
+	assert_string_equal(err, "tests/data/io_width.xml:2: input.width: out of range '33' "
+				 "(allowed 1..32)");
+}
+
 /* Joystick section and the axis scaling, from a device state set by hand
  * (the evdev path itself runs in the QEMU guest, tests/qemu/fw_joystick.sh). */
 static void test_joystick_cfg_and_scaling(void **state)
@@ -582,11 +634,9 @@ static int teardown(void **state)
 int main(int argc, char **argv)
 {
 	const struct CMUnitTest unit[] = {
-	    cmocka_unit_test(test_backends_parsed),
-	    cmocka_unit_test(test_backends_defaults),
-	    cmocka_unit_test(test_backends_errors),
-	    cmocka_unit_test(test_example_config),
-	    cmocka_unit_test(test_joystick_cfg_and_scaling),
+	    cmocka_unit_test(test_backends_parsed), cmocka_unit_test(test_backends_defaults),
+	    cmocka_unit_test(test_backends_errors), cmocka_unit_test(test_backends_one_pass),
+	    cmocka_unit_test(test_example_config),  cmocka_unit_test(test_joystick_cfg_and_scaling),
 	};
 	const struct CMUnitTest process[] = {
 	    cmocka_unit_test_teardown(test_fw_link_and_sigterm_mid_move, teardown),

@@ -1,27 +1,19 @@
-/* <backends> of the vehicle file; format in backend_cfg.h. */
+/* <backends> of the vehicle file; format in backend_cfg.h. The file is
+ * read by hal/posix/config_xml.c, which hands this section's elements to
+ * the handler here (config_section_t). */
 #include "backend_cfg.h"
 
-#include <errno.h>
-#include <expat.h>
 #include <libevdev/libevdev.h>
 #include <stdarg.h>
 #include <stdio.h>
-#include <stdlib.h>
 #include <string.h>
 
-#define MAX_FILE_BYTES (1u << 20)
-
 typedef struct {
-	XML_Parser p;
-	const char *path;
-	char *err;
-	size_t errlen;
-	bool failed;
-	int depth;
-	bool in_backends;
+	config_reader_t *r;
+	unsigned long line; /* the element's start tag */
 	backend_cfg_t *b;
 	unsigned long drive_line[VS_MAX_AXES];
-	unsigned long at_line; /* nonzero: report this line instead of the parser's */
+	unsigned long at_line; /* nonzero: report this line instead of the element's */
 	unsigned long battery_line;
 } bctx_t;
 
@@ -54,46 +46,23 @@ void backend_cfg_defaults(backend_cfg_t *b)
 static int fail(bctx_t *c, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 static int fail(bctx_t *c, const char *fmt, ...)
 {
-	if (c->failed)
-		return -1;
-	c->failed = true;
-	unsigned long line = c->at_line ? c->at_line
-			     : c->p	? (unsigned long)XML_GetCurrentLineNumber(c->p)
-					: 0ul;
-	int n = snprintf(c->err, c->errlen, "%s:%lu: ", c->path, line);
-	if (n >= 0 && (size_t)n < c->errlen) {
-		va_list ap;
-		va_start(ap, fmt);
-		vsnprintf(c->err + n, c->errlen - (size_t)n, fmt, ap);
-		va_end(ap);
-	}
-	if (c->p)
-		XML_StopParser(c->p, XML_FALSE);
-	return -1;
+	va_list ap;
+	va_start(ap, fmt);
+	int rc = config_vfail(c->r, c->at_line ? c->at_line : c->line, fmt, ap);
+	va_end(ap);
+	return rc;
 }
 
 /* Whole-string unsigned integer in [min, max]. */
 static int get_uint(bctx_t *c, const char *el, const char *at, const char *v, unsigned long min,
 		    unsigned long max, uint32_t *out)
 {
-	char *end;
-	errno = 0;
-	if (*v < '0' || *v > '9')
-		return fail(c, "%s.%s: not a number '%s'", el, at, v);
-	unsigned long n = strtoul(v, &end, 10);
-	if (*end != '\0')
-		return fail(c, "%s.%s: not a number '%s'", el, at, v);
-	if (errno == ERANGE || n < min || n > max)
-		return fail(c, "%s.%s: out of range %lu..%lu '%s'", el, at, min, max, v);
-	*out = (uint32_t)n;
-	return 0;
+	return config_attr_uint(c->r, c->line, el, at, v, min, max, out);
 }
 
 static int get_bool(bctx_t *c, const char *el, const char *at, const char *v, bool *out)
 {
-	if (config_parse_bool(v, out) < 0)
-		return fail(c, "%s.%s: not a boolean '%s'", el, at, v);
-	return 0;
+	return config_attr_bool(c->r, c->line, el, at, v, out);
 }
 
 /* Number within [lo, hi] ((lo, hi] when lo_excl; range names it for the
@@ -101,20 +70,13 @@ static int get_bool(bctx_t *c, const char *el, const char *at, const char *v, bo
 static int get_double(bctx_t *c, const char *el, const char *at, const char *v, double lo,
 		      bool lo_excl, double hi, const char *range, double *out)
 {
-	double d;
-	const char *why;
-	if (config_parse_number(v, &d, &why) < 0)
-		return fail(c, "%s.%s: %s '%s'", el, at, why, v);
-	if ((lo_excl ? d <= lo : d < lo) || d > hi)
-		return fail(c, "%s.%s: out of range %s '%s'", el, at, range, v);
-	*out = d;
-	return 0;
+	return config_attr_number(c->r, c->line, el, at, v, lo, lo_excl, hi, range, out);
 }
 
 /* drive.bus is one range for both bus types */
 _Static_assert(BK_CANOPEN_BUSES == BK_MODBUS_BUSES, "drive.bus range");
 
-static int drive_elem(bctx_t *c, const XML_Char **a)
+static int drive_elem(bctx_t *c, const char **a)
 {
 	uint32_t axis = UINT32_MAX, bus = UINT32_MAX, unit = UINT32_MAX, node = UINT32_MAX;
 	int type = -1;
@@ -168,7 +130,7 @@ static int drive_elem(bctx_t *c, const XML_Char **a)
 	if (node != UINT32_MAX && type != BK_DRIVE_CIA402)
 		return fail(c, "drive.node: only for cia402");
 	c->b->drive_type[axis] = (uint8_t)type;
-	c->drive_line[axis] = (unsigned long)XML_GetCurrentLineNumber(c->p);
+	c->drive_line[axis] = c->line;
 	return 0;
 }
 
@@ -177,7 +139,7 @@ static const char *const reg_names[BK_REG_COUNT] = {
     "reg_alarm",	"reg_servo_on", "reg_fault_reset",
 };
 
-static int modbus_elem(bctx_t *c, const XML_Char **a)
+static int modbus_elem(bctx_t *c, const char **a)
 {
 	bk_modbus_bus_t m = {
 	    .baud = 115200, .parity = 'N', .stop_bits = 1, .timeout_ms = 20, .retries = 1};
@@ -234,7 +196,7 @@ static int modbus_elem(bctx_t *c, const XML_Char **a)
 	return 0;
 }
 
-static int canopen_elem(bctx_t *c, const XML_Char **a)
+static int canopen_elem(bctx_t *c, const char **a)
 {
 	bk_canopen_bus_t m = {.heartbeat_ms = 100,
 			      .heartbeat_timeout_ms = 300,
@@ -287,7 +249,7 @@ static int canopen_elem(bctx_t *c, const XML_Char **a)
 	return 0;
 }
 
-static int power_elem(bctx_t *c, const XML_Char **a)
+static int power_elem(bctx_t *c, const char **a)
 {
 	for (; a[0]; a += 2) {
 		if (strcmp(a[0], "settle_ms") != 0)
@@ -300,7 +262,7 @@ static int power_elem(bctx_t *c, const XML_Char **a)
 
 /* The attributes of source="modbus"; judged after the loop, as source may
  * come last. */
-static int battery_modbus_attr(bctx_t *c, const XML_Char **a, bool *hit)
+static int battery_modbus_attr(bctx_t *c, const char **a, bool *hit)
 {
 	bk_battery_modbus_t *m = &c->b->battery_mb;
 	uint32_t v = 0;
@@ -334,12 +296,12 @@ static int battery_modbus_attr(bctx_t *c, const XML_Char **a, bool *hit)
 	return 0;
 }
 
-static int battery_elem(bctx_t *c, const XML_Char **a)
+static int battery_elem(bctx_t *c, const char **a)
 {
 	backend_cfg_t *b = c->b;
 	const char *mb_attr = NULL; /* the first modbus-only attribute given */
 	bool have_bus = false, have_unit = false, have_reg = false;
-	c->battery_line = (unsigned long)XML_GetCurrentLineNumber(c->p);
+	c->battery_line = c->line;
 	for (; a[0]; a += 2) {
 		bool mb = false;
 		if (battery_modbus_attr(c, a, &mb))
@@ -387,7 +349,7 @@ static int battery_elem(bctx_t *c, const XML_Char **a)
 	return 0;
 }
 
-static int line_elem(bctx_t *c, const XML_Char **a)
+static int line_elem(bctx_t *c, const char **a)
 {
 	bk_line_t l = {0};
 	int fn = -1;
@@ -437,7 +399,7 @@ static int line_elem(bctx_t *c, const XML_Char **a)
 	return 0;
 }
 
-static int joystick_elem(bctx_t *c, const XML_Char **a)
+static int joystick_elem(bctx_t *c, const char **a)
 {
 	static const char *const ax[3] = {"x", "y", "rotation"};
 	bk_joystick_t *j = &c->b->joystick;
@@ -486,112 +448,84 @@ static int joystick_elem(bctx_t *c, const XML_Char **a)
 	return 0;
 }
 
-static void XMLCALL on_start(void *ud, const XML_Char *name, const XML_Char **atts)
+/* Each element of <backends>: the section's own (depth 0), its children. */
+static int backends_start(void *ctx, config_reader_t *r, const char *name, const char **atts,
+			  int depth, unsigned long line)
 {
-	bctx_t *c = ud;
-	int depth = c->depth++;
-	if (c->failed)
-		return;
-	if (depth == 1 && !strcmp(name, "backends")) {
-		if (atts[0])
-			fail(c, "backends.%s: unknown attribute", atts[0]);
-		c->in_backends = true;
-		return;
-	}
-	if (!c->in_backends)
-		return; /* the core loader judges the rest */
-	if (depth != 2) {
-		fail(c, "%s: unknown element", name);
-		return;
-	}
+	bctx_t *c = ctx;
+	c->r = r;
+	c->line = line;
+	if (depth == 0)
+		return atts[0] ? fail(c, "backends.%s: unknown attribute", atts[0]) : 0;
+	if (depth != 1)
+		return fail(c, "%s: unknown element", name);
 	if (!strcmp(name, "drive"))
-		drive_elem(c, atts);
-	else if (!strcmp(name, "modbus"))
-		modbus_elem(c, atts);
-	else if (!strcmp(name, "canopen"))
-		canopen_elem(c, atts);
-	else if (!strcmp(name, "power"))
-		power_elem(c, atts);
-	else if (!strcmp(name, "battery"))
-		battery_elem(c, atts);
-	else if (!strcmp(name, "line"))
-		line_elem(c, atts);
-	else if (!strcmp(name, "joystick"))
-		joystick_elem(c, atts);
-	else
-		fail(c, "%s: unknown element", name);
+		return drive_elem(c, atts);
+	if (!strcmp(name, "modbus"))
+		return modbus_elem(c, atts);
+	if (!strcmp(name, "canopen"))
+		return canopen_elem(c, atts);
+	if (!strcmp(name, "power"))
+		return power_elem(c, atts);
+	if (!strcmp(name, "battery"))
+		return battery_elem(c, atts);
+	if (!strcmp(name, "line"))
+		return line_elem(c, atts);
+	if (!strcmp(name, "joystick"))
+		return joystick_elem(c, atts);
+	return fail(c, "%s: unknown element", name);
 }
 
-static void XMLCALL on_end(void *ud, const XML_Char *name)
+/* Cross-references, once every element is known. */
+static int backends_finish(void *ctx, config_reader_t *r)
 {
-	(void)name;
-	bctx_t *c = ud;
-	if (--c->depth == 1)
-		c->in_backends = false;
-}
-
-int backend_cfg_load(const char *path, backend_cfg_t *b, char *err, size_t errlen)
-{
-	bctx_t c = {.path = path, .err = err, .errlen = errlen, .b = b};
-	backend_cfg_defaults(b);
-	FILE *f = fopen(path, "rb");
-	if (!f)
-		return fail(&c, "cannot open: %s", strerror(errno));
-	char *buf = malloc(MAX_FILE_BYTES + 1);
-	if (!buf) {
-		fclose(f);
-		return fail(&c, "out of memory");
-	}
-	size_t n = fread(buf, 1, MAX_FILE_BYTES + 1, f);
-	fclose(f);
-	if (n > MAX_FILE_BYTES) {
-		free(buf);
-		return fail(&c, "file too large");
-	}
-	c.p = XML_ParserCreate(NULL);
-	if (!c.p) {
-		free(buf);
-		return fail(&c, "out of memory");
-	}
-	XML_SetUserData(c.p, &c);
-	XML_SetElementHandler(c.p, on_start, on_end);
-	if (XML_Parse(c.p, buf, (int)n, XML_TRUE) == XML_STATUS_ERROR && !c.failed)
-		fail(&c, "xml: %s", XML_ErrorString(XML_GetErrorCode(c.p)));
-	XML_ParserFree(c.p);
-	c.p = NULL;
-	free(buf);
-	if (c.failed)
-		return -1;
-	/* Cross-references, once every element is known. */
+	bctx_t *c = ctx;
+	const backend_cfg_t *b = c->b;
+	c->r = r;
 	for (unsigned i = 0; i < VS_MAX_AXES; i++)
 		if (b->drive_type[i] == BK_DRIVE_MODBUS && !b->bus[b->drive_bus[i]].used) {
-			c.at_line = c.drive_line[i];
-			return fail(&c, "drive.bus: no <modbus bus=\"%u\"> for axis %u",
+			c->at_line = c->drive_line[i];
+			return fail(c, "drive.bus: no <modbus bus=\"%u\"> for axis %u",
 				    b->drive_bus[i], i);
 		}
 	if (b->battery_source == BK_BATTERY_MODBUS && !b->bus[b->battery_mb.bus].used) {
-		c.at_line = c.battery_line;
-		return fail(&c, "battery.bus: no <modbus bus=\"%u\"> for the battery",
+		c->at_line = c->battery_line;
+		return fail(c, "battery.bus: no <modbus bus=\"%u\"> for the battery",
 			    b->battery_mb.bus);
 	}
 	for (unsigned i = 0; i < VS_MAX_AXES; i++) {
 		if (b->drive_type[i] != BK_DRIVE_CIA402)
 			continue;
 		const bk_canopen_bus_t *co = &b->canopen[b->drive_bus[i]];
-		c.at_line = c.drive_line[i];
+		c->at_line = c->drive_line[i];
 		if (!co->used)
-			return fail(&c, "drive.bus: no <canopen bus=\"%u\"> for axis %u",
+			return fail(c, "drive.bus: no <canopen bus=\"%u\"> for axis %u",
 				    b->drive_bus[i], i);
 		if (b->drive_node[i] == co->master_node)
-			return fail(&c, "drive.node: the master_node of canopen bus %u '%u'",
+			return fail(c, "drive.node: the master_node of canopen bus %u '%u'",
 				    b->drive_bus[i], b->drive_node[i]);
 		for (unsigned j = 0; j < i; j++)
 			if (b->drive_type[j] == BK_DRIVE_CIA402 &&
 			    b->drive_bus[j] == b->drive_bus[i] &&
 			    b->drive_node[j] == b->drive_node[i])
 				return fail(
-				    &c, "drive.node: also axis %u's node on canopen bus %u '%u'", j,
+				    c, "drive.node: also axis %u's node on canopen bus %u '%u'", j,
 				    b->drive_bus[i], b->drive_node[i]);
 	}
 	return 0;
+}
+
+int backend_cfg_load_all(const char *vehicle_path, const char *io_path, vs_config_t *cfg,
+			 hal_io_map_t *io_map, backend_cfg_t *b, char *err, size_t errlen)
+{
+	bctx_t c = {.b = b};
+	const config_section_t sec = {
+	    .name = "backends", .start = backends_start, .finish = backends_finish, .ctx = &c};
+	backend_cfg_defaults(b);
+	return config_load_sections(vehicle_path, io_path, cfg, io_map, &sec, 1, err, errlen);
+}
+
+int backend_cfg_load(const char *path, backend_cfg_t *b, char *err, size_t errlen)
+{
+	return backend_cfg_load_all(path, NULL, NULL, NULL, b, err, errlen);
 }

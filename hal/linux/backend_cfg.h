@@ -1,7 +1,8 @@
-/* vehicle-fw's backend section of the vehicle file (expat).
+/* vehicle-fw's backend section of the vehicle file.
  *
- * The core loader (hal/config_xml.c) skips <backends>; this parser reads
- * only that subtree, with the same error style:
+ * The one reader of the file (hal/posix/config_xml.c) hands the elements of
+ * <backends> to the handler here (config_load_sections), in the same pass
+ * as the core configuration and with the same error style:
  *   "<file>:<line>: <element>.<attribute>: <what> '<value>'"
  *
  *   <vehicle ...>
@@ -164,8 +165,13 @@ typedef struct {
 } backend_cfg_t;
 
 void backend_cfg_defaults(backend_cfg_t *b);
-/* Reads <backends> of the vehicle file at path (absent: defaults). -1 with
- * one line in err on error. */
+/* config_load (vehicle file and io.xml into cfg and io_map) and <backends>
+ * into b (absent: defaults), in one pass over the vehicle file. -1 with one
+ * line in err on error: the core configuration's first, as config_load
+ * reports it, then the backends'. */
+int backend_cfg_load_all(const char *vehicle_path, const char *io_path, vs_config_t *cfg,
+			 hal_io_map_t *io_map, backend_cfg_t *b, char *err, size_t errlen);
+/* <backends> alone (the rest of the file is not judged). */
 int backend_cfg_load(const char *path, backend_cfg_t *b, char *err, size_t errlen);
 /* Name of a line function, for messages. */
 const char *backend_line_name(unsigned fn);

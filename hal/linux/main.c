@@ -330,8 +330,8 @@ static int open_unit(app_t *a, const opts_t *o, backend_cfg_t *bk)
 	hal_io_map_t io_map;
 	char err[512];
 
-	if (config_load(o->config_path, o->io_path, &cfg, &io_map, err, sizeof(err)) < 0 ||
-	    backend_cfg_load(o->config_path, bk, err, sizeof(err)) < 0) {
+	if (backend_cfg_load_all(o->config_path, o->io_path, &cfg, &io_map, bk, err, sizeof(err)) <
+	    0) {
 		rt_log(LOG_ERR, "%s", err);
 		return -1;
 	}

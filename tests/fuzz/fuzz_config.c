@@ -1,11 +1,15 @@
-/* Fuzz target: the configuration loader (hal/config_xml.c: vehicle file and
- * io.xml, expat) and what the firmware makes of an accepted configuration.
+/* Fuzz target: the configuration reader (hal/posix/config_xml.c: vehicle
+ * file and io.xml, expat), with and without the <backends> section's
+ * handler (hal/linux/backend_cfg.c), and what the firmware makes of an
+ * accepted configuration.
  *
  * Input: the vehicle file, optionally followed by a NUL byte and io.xml.
  * Checked: a rejected file gives a one-line error naming the file; an
  * accepted one passes vs_config_check, boots the unit on the simulated
  * plant (vehicle_init succeeds) Unpowered, and a few ticks later nothing
- * has moved.
+ * has moved. Read with the backends in the same pass, the core's verdict
+ * comes first and is the same (error text, configuration), and the
+ * backends' verdict is the same as when they are read alone.
  */
 #include <stdint.h>
 #include <stdio.h>
@@ -14,6 +18,7 @@
 #include <sys/mman.h>
 #include <unistd.h>
 
+#include "../../hal/linux/backend_cfg.h"
 #include "../../hal/posix/config_xml.h"
 #include "../../host_sim/sim.h"
 
@@ -34,6 +39,51 @@ static int mem_file(const uint8_t *data, size_t n, char *path, size_t cap)
 	return fd;
 }
 
+/* One line, naming the file. */
+static void well_formed(int rc, const char *err, size_t cap)
+{
+	if (memchr(err, '\0', cap) == NULL || strchr(err, '\n'))
+		abort();
+	if (rc != 0 && (rc != -1 || strncmp(err, "/proc/self/fd/", 14) != 0))
+		abort();
+	if (rc == 0 && err[0] != '\0')
+		abort();
+}
+
+/* The same files read with <backends> in the one pass (the core's verdict
+ * first, unchanged), and <backends> alone (the same verdict when the core
+ * accepts). */
+static void backends_agree(const char *vpath, const char *ipath, int core_rc, const char *core_err,
+			   const vs_config_t *cfg_core, const hal_io_map_t *map_core)
+{
+	static vs_config_t cfg_all;
+	static hal_io_map_t map_all;
+	static backend_cfg_t bk_all, bk_alone;
+	char err_all[256], err_alone[256];
+
+	memset(&cfg_all, 0, sizeof cfg_all);
+	memset(&map_all, 0, sizeof map_all);
+	memset(err_all, 'x', sizeof err_all);
+	memset(err_alone, 'x', sizeof err_alone);
+	int all = backend_cfg_load_all(vpath, ipath, &cfg_all, &map_all, &bk_all, err_all,
+				       sizeof err_all);
+	int alone = backend_cfg_load(vpath, &bk_alone, err_alone, sizeof err_alone);
+	well_formed(all, err_all, sizeof err_all);
+	well_formed(alone, err_alone, sizeof err_alone);
+	if (core_rc != 0) {
+		if (all == 0 || strcmp(err_all, core_err) != 0)
+			abort(); /* the core's error comes first */
+		return;
+	}
+	if (memcmp(&cfg_all, cfg_core, sizeof cfg_all) != 0 ||
+	    memcmp(&map_all, map_core, sizeof map_all) != 0)
+		abort(); /* the backends change nothing of the core's */
+	if (all != alone || (all != 0 && strcmp(err_all, err_alone) != 0))
+		abort();
+	if (all == 0 && memcmp(&bk_all, &bk_alone, sizeof bk_all) != 0)
+		abort();
+}
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
@@ -48,7 +98,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	if (nul)
 		ifd = mem_file(nul + 1, size - vlen - 1, ipath, sizeof ipath);
 	memset(err, 'x', sizeof err);
+	memset(&cfg, 0, sizeof cfg); /* padding too: compared with memcmp */
+	memset(&map, 0, sizeof map);
 	int rc = config_load(vpath, nul ? ipath : NULL, &cfg, &map, err, sizeof err);
+	backends_agree(vpath, nul ? ipath : NULL, rc, err, &cfg, &map);
 	close(vfd);
 	if (ifd >= 0)
 		close(ifd);

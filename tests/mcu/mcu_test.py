@@ -302,6 +302,14 @@ def c_boot_and_queries(b):
     expect(b, "getDefaultAcceleration", "ok true 500.000 180.000")
     expect(b, "getPosition", "ok true 0.000 0.000 0.000")
     expect(b, "getActiveAlarm 16", "ok true 0 0")
+    # the board's configuration (hal/cortexm/board_main.c): the reference base,
+    # drives that follow at once, no joystick
+    assert b.ex("$config").startswith("ok kinematics tick_hz wheel_diameter_mm "), "$config"
+    expect(b, "$config tick_hz", "ok tick_hz 1000")
+    expect(b, "$config wheel_diameter_mm", "ok wheel_diameter_mm 150.000")
+    expect(b, "$config drive_lag_ms", "ok drive_lag_ms 0.000 0.000 0.000 0.000")
+    expect(b, "$config has_joystick", "ok has_joystick false")
+    expect(b, "$config nosuch", "error 8 $config: no field nosuch")
     # the loopback battery: a constant 24.0 V, in 0.1 V units
     expect(b, "getBatteryVoltage", "ok true 240.000")
     expect(b, "moveForward 100", "ok false")
@@ -669,7 +677,7 @@ REQUESTS = [
     "stop", "setJoystick on", "moveForward 10", "setJoystick off", "setServo false",
     "moveForward 10", "setPower false", "setServo true",
     "getActiveAlarm 32767", "clearAlarm", "$help", "$help moveContinuousRel", "$version",
-    "$diag", "$link",
+    "$diag", "$link", "$config", "$config joystick_deadband",
 ]
 
 
