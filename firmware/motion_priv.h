@@ -70,6 +70,8 @@ static inline bool twist_zero(const fx_twist_t *t)
 /* motion_geom.c */
 /* Rotate a body-frame vector into the world frame at heading th. */
 void motion_body_to_world(q32_t th, q32_t bx, q32_t by, q32_t *wx, q32_t *wy);
+/* The pose rel (in the body frame of from) in the world frame. */
+fx_pose_t motion_rel_to_abs(const fx_pose_t *from, const fx_pose_t *rel);
 /* Length of (dx, dy) and its unit direction in Q30 (0, 0 for no length). */
 q32_t motion_unit_dir(q32_t dx, q32_t dy, int32_t *ux, int32_t *uy);
 

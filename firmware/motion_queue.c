@@ -73,12 +73,7 @@ bool motion_linear_abs(motion_t *m, const fx_pose_t *abs_pose)
 
 bool motion_linear_rel(motion_t *m, const fx_pose_t *rel)
 {
-	fx_pose_t t = m->ref;
-	q32_t dx, dy;
-	motion_body_to_world(m->ref.th_deg, rel->x_mm, rel->y_mm, &dx, &dy);
-	t.x_mm += dx;
-	t.y_mm += dy;
-	t.th_deg = fx_wrap_deg(m->ref.th_deg + rel->th_deg);
+	fx_pose_t t = motion_rel_to_abs(&m->ref, rel);
 	return motion_linear_abs(m, &t);
 }
 

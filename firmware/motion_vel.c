@@ -26,12 +26,7 @@ bool motion_continuous_rel(motion_t *m, const fx_pose_t *rel)
 {
 	if (!velocity_mode_allowed(m) || m->q_count > 0 || m->stopping)
 		return false;
-	fx_pose_t t = m->ref;
-	q32_t dx, dy;
-	motion_body_to_world(m->ref.th_deg, rel->x_mm, rel->y_mm, &dx, &dy);
-	t.x_mm += dx;
-	t.y_mm += dy;
-	t.th_deg = fx_wrap_deg(m->ref.th_deg + rel->th_deg);
+	fx_pose_t t = motion_rel_to_abs(&m->ref, rel);
 	m->goal = t;
 	m->goal_position_done = false;
 	/* From rest the first tick picks the direction; a retarget keeps the

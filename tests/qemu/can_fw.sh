@@ -63,20 +63,7 @@ grep -q " vcan0 181#" /tmp/st && fail "a status frame of node 1: $(cat /tmp/st)"
 grep " vcan0 185#" /tmp/st | head -1 | grep -q "#190000" || fail "status A: $(cat /tmp/st)"
 pass "status frames 0x185/0x285/0x385 at 10 Hz, state Unpowered"
 
-# iso REQUEST-HEX RESPONSE-HEX: one request through the kernel's ISO-TP.
-iso() {
-	local req=$1 want=$2 before got rx=585
-	before=$(cat /proc/net/can/rcvlist_* | grep -cE '^ +vcan0 ')
-	timeout 5 isotprecv -s 605 -d 585 vcan0 >/tmp/iso.out 2>/tmp/iso.err &
-	local rcv=$!
-	wait_rx $((before + 1))
-	[ ${#req} -le 20 ] && rx=7FF # a single frame needs no flow control
-	echo "$req" | timeout 5 isotpsend -b -s 605 -d $rx vcan0 ||
-		fail "isotpsend '$req': $(cat /tmp/iso.err)"
-	wait $rcv || fail "isotprecv: no response to '$req' ($(cat /tmp/iso.err))"
-	got=$(tr -s ' ' </tmp/iso.out | sed 's/ *$//')
-	[ "$got" = "$want" ] || fail "request $req: got '$got', expected '$want'"
-}
+ISO_NODE=5
 iso "41 1E 01" "41 1E 00 01"                                               # setPower true
 iso "42 1F 01" "42 1F 00 01"                                               # setServo true
 iso "43 20 00 00 00 00 00 C0 72 40 00 00 00 00 00 00 4E 40" "43 20 00 01" # setVelocity 300 60

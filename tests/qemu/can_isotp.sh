@@ -12,25 +12,6 @@ T=can_isotp
 
 start_sim --node 1 --status-hz 0
 
-# iso REQUEST-HEX RESPONSE-HEX [isotprecv options]: one request through
-# isotpsend, its response through isotprecv, both on the unit's identifiers.
-iso() {
-	local req=$1 want=$2 before got; shift 2
-	before=$(cat /proc/net/can/rcvlist_* | grep -cE '^ +vcan0 ')
-	timeout 5 isotprecv "$@" -s 601 -d 581 vcan0 >/tmp/iso.out 2>/tmp/iso.err &
-	local rcv=$!
-	wait_rx $((before + 1))
-	# A single-frame request needs no flow control: the sender then listens
-	# elsewhere (7FF), so that only isotprecv answers the response.
-	local rx=581
-	[ ${#req} -le 20 ] && rx=7FF
-	echo "$req" | timeout 5 isotpsend -b -s 601 -d $rx vcan0 ||
-		fail "isotpsend '$req' failed: $(cat /tmp/iso.err)"
-	wait $rcv || fail "isotprecv: no response to '$req' ($(cat /tmp/iso.err))"
-	got=$(tr -s ' ' </tmp/iso.out | sed 's/ *$//')
-	[ "$got" = "$want" ] || fail "request $req: got '$got', expected '$want'"
-}
-
 # seq 0x41.. in order; the unit is set up, paused, then every multi-frame
 # request runs (results as the console gives them in this state), then every
 # multi-frame response is read.

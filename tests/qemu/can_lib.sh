@@ -69,3 +69,26 @@ pos() {
 near() { # near VALUE WANT TOL
 	awk -v v="$1" -v w="$2" -v t="$3" 'BEGIN { d = v - w; if (d < 0) d = -d; exit !(d <= t) }'
 }
+
+# iso REQUEST-HEX RESPONSE-HEX [isotprecv options]: one request through
+# the kernel's ISO-TP (isotpsend), its response through isotprecv, both on
+# the identifiers of node ISO_NODE (default 1).
+iso() {
+	local req=$1 want=$2 before got n=${ISO_NODE:-1}
+	shift 2
+	local s d
+	s=$(printf '%X' $((0x600 + n))) d=$(printf '%X' $((0x580 + n)))
+	before=$(cat /proc/net/can/rcvlist_* | grep -cE '^ +vcan0 ')
+	timeout 5 isotprecv "$@" -s "$s" -d "$d" vcan0 >/tmp/iso.out 2>/tmp/iso.err &
+	local rcv=$!
+	wait_rx $((before + 1))
+	# A single-frame request needs no flow control: the sender then listens
+	# elsewhere (7FF), so that only isotprecv answers the response.
+	local rx=$d
+	[ ${#req} -le 20 ] && rx=7FF
+	echo "$req" | timeout 5 isotpsend -b -s "$s" -d $rx vcan0 ||
+		fail "isotpsend '$req' failed: $(cat /tmp/iso.err)"
+	wait $rcv || fail "isotprecv: no response to '$req' ($(cat /tmp/iso.err))"
+	got=$(tr -s ' ' </tmp/iso.out | sed 's/ *$//')
+	[ "$got" = "$want" ] || fail "request $req: got '$got', expected '$want'"
+}
