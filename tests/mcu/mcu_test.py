@@ -445,12 +445,18 @@ def moving_then(b, line):
     return at
 
 
+# The reference leads the odometry getPosition reads by at most one tick of
+# travel: 0.5 mm at the default 500 mm/s.
+TICK_LEAD_MM = 0.5
+
+
 def braked_within(x, at):
     """Where a unit that was between at[0] and at[1] when it was told to
     brake stops: it accelerated from rest at the default 500 mm/s^2, so
     braking at the same rate takes no longer than getting there did, and no
     more than from the default 500 mm/s (250 mm)."""
-    return at[0] - COUNT_MM <= x <= at[1] + min(at[1], 500.0 ** 2 / (2 * 500.0)) + COUNT_MM
+    top = at[1] + TICK_LEAD_MM
+    return at[0] - COUNT_MM <= x <= top + min(top, 500.0 ** 2 / (2 * 500.0)) + COUNT_MM
 
 
 def c_pause_resume_keeps_queue(b):
@@ -616,9 +622,9 @@ def c_other_moves(b):
     at = moving_then(b, "moveContinuousRel 100 0 0")
     b.settle(4000)
     x = position(b)[0]
-    # the new goal is 100 mm from where the unit was when the request ran:
-    # between the two getPositions around it
-    assert at[0] + 100 - COUNT_MM <= x <= at[1] + 100 + COUNT_MM, (x, at)
+    # the new goal is 100 mm from the reference when the request ran:
+    # between the two getPositions around it, plus the reference's lead
+    assert at[0] + 100 - COUNT_MM <= x <= at[1] + 100 + TICK_LEAD_MM + COUNT_MM, (x, at)
     expect(b, "getState", 'ok true 16 "Ready"')
     expect(b, "setPosition 0 0 0", "ok true")
     expect(b, "moveCruiseAbs 300 0", "ok true")
