@@ -156,6 +156,16 @@ static unsigned first_out_of_range(const vs_config_t *c)
 #define ROW(m) VS_CONFIG_ROW_##m
 #define PI_D   3.14159265358979323846
 
+bool vs_jerk_fits(const vs_config_t *c, double j, double limit)
+{
+	double hz = (double)c->tick_hz;
+	if (j == 0.0)
+		return true;
+	/* At least 64 raw units a tick^3: the profiles keep 4 below the limit
+	 * for rounding (traj.h, section 4). */
+	return j * 4294967296.0 / (hz * hz * hz) >= 64.0 && (limit == 0.0 || j <= limit);
+}
+
 /* Names the field for a report: returns code. */
 static int report(const char **name, const char *field, int code)
 {
@@ -185,6 +195,16 @@ static int cross_rules(const vs_config_t *c, unsigned bad, const char **name)
 	if (bad >= ROW(acc_default_r_deg_s2) &&
 	    !positive_upto(c->acc_default_r_deg_s2, c->acc_limit_r_deg_s2))
 		return report(name, "acc_default_r_deg_s2", -2);
+	if (bad > ROW(jerk_limit_t_mm_s3) && !vs_jerk_fits(c, c->jerk_limit_t_mm_s3, 0))
+		return report(name, "jerk_limit_t_mm_s3", -2);
+	if (bad > ROW(jerk_limit_r_deg_s3) && !vs_jerk_fits(c, c->jerk_limit_r_deg_s3, 0))
+		return report(name, "jerk_limit_r_deg_s3", -2);
+	if (bad > ROW(jerk_default_t_mm_s3) &&
+	    !vs_jerk_fits(c, c->jerk_default_t_mm_s3, c->jerk_limit_t_mm_s3))
+		return report(name, "jerk_default_t_mm_s3", -2);
+	if (bad > ROW(jerk_default_r_deg_s3) &&
+	    !vs_jerk_fits(c, c->jerk_default_r_deg_s3, c->jerk_limit_r_deg_s3))
+		return report(name, "jerk_default_r_deg_s3", -2);
 	/* Per-tick loop gain at most 1/4 keeps the discrete loop well damped. */
 	if (bad > ROW(wheel_kp_per_s) && c->wheel_kp_per_s * 4.0 > (double)c->tick_hz)
 		return report(name, "wheel_kp_per_s", -2);

@@ -46,6 +46,10 @@ typedef struct {
 	double acc_limit_t_mm_s2, acc_limit_r_deg_s2;
 	double vel_default_t_mm_s, vel_default_r_deg_s;
 	double acc_default_t_mm_s2, acc_default_r_deg_s2;
+	/* Jerk (mm/s^3, deg/s^3), 0 = unlimited: the limit is what stops reach
+	 * their acceleration with, the default what moves run at ($jerk). */
+	double jerk_limit_t_mm_s3, jerk_limit_r_deg_s3;
+	double jerk_default_t_mm_s3, jerk_default_r_deg_s3;
 	uint16_t jog_timeout_default_ms;
 
 	/* Wheel position loop and supervision. */
@@ -138,5 +142,8 @@ void vs_config_defaults(vs_config_t *c);
 /* Checks ranges and consistency. Returns 0 when valid, otherwise a negative
  * number and writes the offending field's name to *field. */
 int vs_config_check(const vs_config_t *c, const char **field);
+/* A jerk j (mm/s^3 or deg/s^3) the profiles can hold at c's tick rate
+ * (0, unlimited, always), and within limit unless that is 0. */
+bool vs_jerk_fits(const vs_config_t *c, double j, double limit);
 
 #endif

@@ -10,6 +10,8 @@ static void per_tick(motion_t *m)
 	m->vmax_r_pt = m->p.vel_limit_r / hz;
 	m->amax_t_pt2 = m->p.acc_limit_t / hz / hz;
 	m->amax_r_pt2 = m->p.acc_limit_r / hz / hz;
+	m->jmax_t_pt3 = m->p.jerk_limit_t / hz / hz / hz;
+	m->jmax_r_pt3 = m->p.jerk_limit_r / hz / hz / hz;
 }
 
 void motion_init(motion_t *m, const motion_params_t *p)
@@ -48,6 +50,14 @@ void motion_set_accel(motion_t *m, q32_t at, q32_t ar)
 			traj_corner_rates(&c->corner, m->a_r_pt2);
 	}
 	motion_backward_pass(m);
+}
+
+void motion_set_jerk(motion_t *m, q32_t jt, q32_t jr)
+{
+	int64_t hz = m->p.tick_hz;
+	m->j_t_pt3 = jt / hz / hz / hz;
+	m->j_r_pt3 = jr / hz / hz / hz;
+	limits_changed(m);
 }
 
 void motion_set_jog_timeout_ms(motion_t *m, uint32_t ms)
@@ -157,6 +167,8 @@ void motion_halt(motion_t *m)
 	limits_changed(m);
 	m->seg.kind = SEG_NONE;
 	m->v = 0;
+	m->acc = 0;
+	m->sc_on = false;
 	m->vel = (fx_twist_t){0};
 	m->vtarget = (fx_twist_t){0};
 	m->stopping = false;

@@ -30,6 +30,9 @@ typedef struct {
 	/* Hard limits, per second, Q32 (mm/s, deg/s, mm/s^2, deg/s^2). Stops
 	 * (stop, pause, contact, obstacle) decelerate at acc_limit. */
 	q32_t vel_limit_t, vel_limit_r, acc_limit_t, acc_limit_r;
+	/* Jerk limits (mm/s^3, deg/s^3), 0 = unlimited: stops reach acc_limit
+	 * at these. */
+	q32_t jerk_limit_t, jerk_limit_r;
 	q32_t cruise_blend_mm;
 } motion_params_t;
 
@@ -107,6 +110,7 @@ typedef struct {
 	/* Settings in per-tick units (derived once per change). */
 	q32_t v_t_pt, v_r_pt, a_t_pt2, a_r_pt2;
 	q32_t amax_t_pt2, amax_r_pt2, vmax_t_pt, vmax_r_pt;
+	q32_t j_t_pt3, j_r_pt3, jmax_t_pt3, jmax_r_pt3; /* jerks, 0 = unlimited */
 	q32_t cap_t_pt; /* caution cap, 0 = none */
 	uint32_t jog_timeout_ticks;
 
@@ -134,6 +138,12 @@ typedef struct {
 	q32_t lim_vmax, lim_a, lim_extra;
 	q32_t lim_cruise; /* lim_vmax plus its braking distance (-1: not yet) */
 	int64_t lim_n;	  /* the profile's last braking step count (traj_step_near) */
+	q32_t lim_j;	  /* the piece's jerk limit, 0 = unlimited */
+	/* Jerk-limited pieces (motion_path.c, sc_speed): the planned profile,
+	 * whether it runs, and the last tick's change of speed. */
+	traj_sc_t sc;
+	bool sc_on;
+	q32_t acc;
 
 	/* Jog / joystick velocity target (body frame, per tick). */
 	fx_twist_t vtarget;
@@ -151,6 +161,9 @@ void motion_init(motion_t *m, const motion_params_t *p);
 void motion_set_velocity(motion_t *m, q32_t vt, q32_t vr);
 void motion_set_accel(motion_t *m, q32_t at, q32_t ar);
 void motion_set_jog_timeout_ms(motion_t *m, uint32_t ms);
+/* Jerk (mm/s^3, deg/s^3, Q32; 0 = unlimited). A piece already under way
+ * keeps the profile it was planned with. */
+void motion_set_jerk(motion_t *m, q32_t jt, q32_t jr);
 /* Caution speed cap (obstacle-warning input); 0 removes it. */
 void motion_set_caution(motion_t *m, q32_t vt_cap);
 

@@ -297,6 +297,22 @@ static inline q32_t piece_limit(const seg_t *g, q32_t t, q32_t r)
 	}
 }
 
+/* Stands in for an unlimited (0) jerk in piece_limit, which takes the
+ * lower of two; a piece limit above JERK_REAL (the largest configurable
+ * jerk at the slowest tick is about 2^35 raw) is none. */
+#define JERK_NONE ((q32_t)1 << 60)
+#define JERK_REAL ((q32_t)1 << 40)
+
+/* The active piece's jerk limit for translation and rotation jerks t, r
+ * (0 = unlimited); 0 when neither limits it. */
+static q32_t piece_jerk(const seg_t *g, q32_t t, q32_t r)
+{
+	if (t == 0 && r == 0)
+		return 0;
+	q32_t j = piece_limit(g, t ? t : JERK_NONE, r ? r : JERK_NONE);
+	return j >= JERK_REAL ? 0 : j;
+}
+
 /* Speed cap and acceleration of the active piece; a corner's are those the
  * backward pass planned with (corner_a_pt2: piece_limit at the set rates). */
 static void piece_limits(const motion_t *m, q32_t *vmax, q32_t *a)
@@ -444,10 +460,42 @@ static bool blends_onward(motion_t *m, uint8_t finished_kind)
 static void stop_done(motion_t *m)
 {
 	m->stopping = false;
+	m->acc = 0;
 	while (m->stop_drop)
 		pop(m);
 	m->seg.kind = SEG_NONE;
 	m->mode = m->q_count ? MODE_PATH : MODE_IDLE;
+}
+
+/* A piece from rest to rest under a jerk limit: the planned S-curve
+ * (traj.h, section 4) over what is left of it. Braking (pause, stop), or
+ * resumed while still braking, it changes speed toward rest at the limits
+ * (section 5) and plans the rest of the piece once at rest. Out of line:
+ * the acceleration-limited pieces do not pay for it. */
+static q32_t sc_speed(motion_t *m, bool braking)
+{
+	q32_t rem = m->seg.len - m->seg.s;
+	/* A speed cap lowered below the plan's (setVelocity, the caution
+	 * input) ends it: the unit comes to rest and plans again. */
+	if (m->sc_on && m->lim_vmax <= m->sc.vm)
+		m->sc_on = false;
+	if (braking || (!m->sc_on && m->v > 0)) {
+		m->sc_on = false;
+		q32_t v = m->v;
+		traj_jslew(&v, &m->acc, 0, piece_limit(&m->seg, m->amax_t_pt2, m->amax_r_pt2),
+			   piece_jerk(&m->seg, m->jmax_t_pt3, m->jmax_r_pt3));
+		return fx_min64(v, rem);
+	}
+	if (!m->sc_on) {
+		if (!traj_sc_plan(&m->sc, rem, m->lim_vmax, m->lim_a, m->lim_j)) {
+			m->lim_j = 0; /* no room for the rounding margins: as without */
+			return traj_step(m->v, rem, m->lim_vmax, m->lim_a);
+		}
+		m->sc_on = true;
+	}
+	q32_t u = traj_sc_next(&m->sc);
+	m->acc = u - m->v;
+	return u;
 }
 
 /* The three parts of path_tick below are inline by force: left to the
@@ -466,6 +514,8 @@ static inline __attribute__((always_inline)) q32_t piece_speed(motion_t *m, bool
 		m->lim_n = -1;
 		m->lim_ok = true;
 	}
+	if (m->lim_j > 0)
+		return sc_speed(m, braking);
 	q32_t d = m->seg.len - m->seg.s + m->lim_extra;
 	q32_t u;
 	if (m->v == m->lim_vmax) {
@@ -519,6 +569,7 @@ static inline __attribute__((always_inline)) bool piece_finish(motion_t *m)
 	m->seg.kind = SEG_NONE;
 	if (!blends_onward(m, kind)) {
 		m->v = 0;
+		m->acc = 0;
 		m->rest_tick = true;
 		return false;
 	}
@@ -566,6 +617,12 @@ static void path_tick(motion_t *m, fx_twist_t *out)
 				continue;
 			}
 			m->seg.s = 0;
+			m->sc_on = false;
+			/* From rest to rest, a piece runs on the jerk-limited
+			 * profile; its limit is fixed for the piece. */
+			m->lim_j = m->v == 0 && !blends_onward(m, m->seg.kind)
+					   ? piece_jerk(&m->seg, m->j_t_pt3, m->j_r_pt3)
+					   : 0;
 			limits_changed(m);
 			if (m->rest_tick) {
 				/* A stop is a tick at zero before the next piece: the

@@ -67,6 +67,53 @@
  * While braking, Umax(d) is taken each tick at a distance that shrinks by
  * about u = n a, so its n falls by one a tick: starting from the last
  * tick's n, two products confirm it and the square root is not needed.
+ *
+ * 4. Jerk-limited rest-to-rest profile (traj_sc_*)
+ *
+ * Let b_N be N ticks of 1/N (a box summing to 1). The speed profile
+ *
+ *     u = d (b_Nv * b_Na * b_Nj)        (* is convolution)
+ *
+ * covers exactly d, and its differences are those of its boxes, with
+ * Delta b_N = (delta_0 - delta_N) / N:
+ *
+ *     speed  u <= d / Nv
+ *     accel  Delta u = (d / Nv) (g - g(. - Nv)),  g = b_Na * b_Nj <= 1 / Na
+ *     jerk   Delta^2 u = d / (Nv Na) (b_Nj - b_Nj(. - Na) - b_Nj(. - Nv)
+ *                                     + b_Nj(. - Na - Nv)).
+ *
+ * With Na >= Nj and Nv >= Na + Nj the four jerk pulses (and the two
+ * acceleration humps) do not overlap, so the profile never exceeds speed
+ * d / Nv, acceleration d / (Nv Na) and jerk d / (Nv Na Nj): a 7-phase
+ * S-curve (jerk +J, 0, -J, cruise, -J, 0, +J) whose phases are whole ticks,
+ * Nv + Na + Nj - 2 ticks long. Every time-optimal continuous rest-to-rest
+ * profile has this shape with Tj = min(A / J, sqrt(V / J), cbrt(d / 2J)),
+ * Ta >= Tj and Tv = max(d / V, Ta + Tj) (speed and acceleration reached,
+ * or only one, or neither), so the planner searches the integers around
+ * them for the shortest (Nv, Na, Nj) meeting
+ *
+ *     d / Nv <= V,  d / (Nv Na) <= A,  d / (Nv Na Nj) <= J.
+ *
+ * Sampling: with P = Nv Na Nj the convolution's integer counts c_k
+ * (speed), a_k = c_k - c_(k-1) and the jerk count j_k = a_k - a_(k-1) in
+ * {-1, 0, +1} (which pulse covers k) give the position after step k as
+ * floor(d S_k / P), S_k = c_0 + ... + c_k. So d a / P, d c / P and d S / P
+ * advance by additions of (quotient, remainder) pairs over P: no
+ * multiplication or division per tick, and S ends at P, so the piece lands
+ * on d to the raw unit. Flooring moves a position by less than one raw
+ * unit, which shifts a speed by less than 1, an acceleration by less than
+ * 2 and a jerk by less than 4 units: the plan keeps that far below V, A and
+ * J, so the sampled steps stay within the limits exactly.
+ *
+ * 5. Jerk-limited change of speed (traj_jslew)
+ *
+ * One derivative down, a change of speed is the profile of section 1:
+ * the speed still to change plays the distance, the acceleration plays the
+ * speed, the jerk the acceleration, and amax the speed cap. traj_step then
+ * gives the next acceleration, which lands on the target speed exactly,
+ * never changes by more than j and never exceeds amax; an acceleration
+ * pointing away from the target (a new target, a brake from accelerating)
+ * is first turned round at j.
  */
 #ifndef TRAJ_H
 #define TRAJ_H
@@ -104,6 +151,28 @@ typedef struct {
 void traj_rate_init(traj_rate_t *r, q32_t a);
 q32_t traj_brake_dist_r(q32_t u, const traj_rate_t *r);
 q32_t traj_umax_r(q32_t d, const traj_rate_t *r);
+
+/* A planned jerk-limited rest-to-rest profile and its sampler (section 4).
+ * Limits per tick (speed), tick^2, tick^3, in raw units. */
+typedef struct {
+	int64_t vm, am, jm;	    /* the limits less the rounding margins */
+	int64_t nv, na, nj, p;	    /* box lengths, P = Nv Na Nj */
+	int64_t ticks, k;	    /* steps in all, steps taken */
+	int64_t qd, rd;		    /* d = qd P + rd */
+	int64_t aq, ar, cq, cr, sq; /* d a / P, d c / P, d S / P: quotient, remainder */
+	int64_t sr;
+} traj_sc_t;
+
+/* Plans d (> 0) at speed v, acceleration a and jerk j; false when the
+ * limits leave no room for the rounding margins or the profile is too long
+ * to sample (P >= 2^62). */
+bool traj_sc_plan(traj_sc_t *p, q32_t d, q32_t v, q32_t a, q32_t j);
+/* The next step (0 once the profile is complete); the steps sum to d. */
+q32_t traj_sc_next(traj_sc_t *p);
+/* One tick of a jerk-limited change of the speed *v toward target (section
+ * 5); *acc is the last tick's change and becomes this tick's. Returns the
+ * new speed. */
+q32_t traj_jslew(q32_t *v, q32_t *acc, q32_t target, q32_t amax, q32_t j);
 
 /* Geometry of a blended corner with tangent length t_mm and deflection
  * phi_deg (signed, |phi| < 180). */

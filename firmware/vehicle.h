@@ -81,6 +81,12 @@ void vehicle_link_heard(vehicle_t *v, vs_link_id_t link);
  * init; the set form ($watchdog) restarts the watchdog. */
 uint32_t vehicle_link_timeout(const vehicle_t *v);
 void vehicle_set_link_timeout(vehicle_t *v, uint32_t ms);
+/* The jerk moves run at (mm/s^3, deg/s^3; 0 = unlimited), from the
+ * configuration's defaults; the set form ($jerk) takes values that fit
+ * (vs_jerk_fits: within the limits, held at the tick rate) and refuses
+ * others, changing nothing. A piece under way keeps its profile. */
+void vehicle_jerk(const vehicle_t *v, double *jt, double *jr);
+bool vehicle_set_jerk(vehicle_t *v, double jt, double jr);
 
 /* The operations, in spec order. */
 bool vs_clearAlarm(vehicle_t *v);
@@ -163,7 +169,7 @@ struct vehicle {
 	fx_trig_cache_t odom_trig; /* odometry's last heading */
 	uint8_t naxes;
 	/* Settings in force (interface units, as accepted). */
-	vs_velocity_t vel_set, acc_set;
+	vs_velocity_t vel_set, acc_set, jerk_set;
 	int16_t jog_timeout_ms;
 	/* Unit state. */
 	bool powered, servo, locked, stuck, sensor_lock, joystick_on;

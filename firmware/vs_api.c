@@ -90,6 +90,8 @@ static motion_kin_t init_motion(vehicle_t *v, const vs_config_t *cfg)
 	    .vel_limit_r = to_q32(cfg->vel_limit_r_deg_s),
 	    .acc_limit_t = to_q32(cfg->acc_limit_t_mm_s2),
 	    .acc_limit_r = to_q32(cfg->acc_limit_r_deg_s2),
+	    .jerk_limit_t = to_q32(cfg->jerk_limit_t_mm_s3),
+	    .jerk_limit_r = to_q32(cfg->jerk_limit_r_deg_s3),
 	    .cruise_blend_mm = to_q32(cfg->cruise_blend_mm),
 	};
 	motion_init(&v->motion, &mp);
@@ -97,6 +99,8 @@ static motion_kin_t init_motion(vehicle_t *v, const vs_config_t *cfg)
 			    to_q32(cfg->vel_default_r_deg_s));
 	motion_set_accel(&v->motion, to_q32(cfg->acc_default_t_mm_s2),
 			 to_q32(cfg->acc_default_r_deg_s2));
+	motion_set_jerk(&v->motion, to_q32(cfg->jerk_default_t_mm_s3),
+			to_q32(cfg->jerk_default_r_deg_s3));
 	motion_set_jog_timeout_ms(&v->motion, cfg->jog_timeout_default_ms);
 	return mp.kin;
 }
@@ -171,6 +175,7 @@ int vehicle_init(vehicle_t *v, const vs_config_t *cfg, const vs_hal_t *hal, cons
 	double counts_per_mm = init_kin(v, cfg, init_motion(v, cfg));
 	v->vel_set = (vs_velocity_t){cfg->vel_default_t_mm_s, cfg->vel_default_r_deg_s};
 	v->acc_set = (vs_velocity_t){cfg->acc_default_t_mm_s2, cfg->acc_default_r_deg_s2};
+	v->jerk_set = (vs_velocity_t){cfg->jerk_default_t_mm_s3, cfg->jerk_default_r_deg_s3};
 	v->jog_timeout_ms = (int16_t)cfg->jog_timeout_default_ms;
 	init_supervision(v, cfg, counts_per_mm);
 
@@ -398,5 +403,21 @@ bool vs_moveJog(vehicle_t *v, double xVel, double yVel, double thetaVel)
 		return false;
 	if (!motion_jog(&v->motion, to_q32(xVel), to_q32(yVel), to_q32(thetaVel)))
 		return vehicle_motion_refused(v, op, true);
+	return true;
+}
+
+void vehicle_jerk(const vehicle_t *v, double *jt, double *jr)
+{
+	*jt = v->jerk_set.translation;
+	*jr = v->jerk_set.rotation;
+}
+
+bool vehicle_set_jerk(vehicle_t *v, double jt, double jr)
+{
+	if (!vs_jerk_fits(&v->cfg, jt, v->cfg.jerk_limit_t_mm_s3) ||
+	    !vs_jerk_fits(&v->cfg, jr, v->cfg.jerk_limit_r_deg_s3))
+		return false;
+	v->jerk_set = (vs_velocity_t){jt, jr};
+	motion_set_jerk(&v->motion, to_q32(jt), to_q32(jr));
 	return true;
 }

@@ -396,6 +396,34 @@ static bool exec_config(console_t *c, char **argv, unsigned ntok, rbuf_t *r)
 	return true;
 }
 
+/* $jerk [T R]: the jerk moves run at, mm/s^3 and deg/s^3 (0 = unlimited),
+ * with the configured limits; the set form takes both or changes nothing. */
+static bool exec_jerk(console_t *c, char **argv, unsigned ntok, rbuf_t *r)
+{
+	double jt, jr;
+	if (ntok != 1 && ntok != 3)
+		return reply_error(c, r, "%d $jerk takes 0 or 2 arguments, got %u",
+				   CONSOLE_E_ARITY, ntok - 1);
+	if (ntok == 3) {
+		if (np_parse_double(argv[1], &jt) != NP_OK || np_parse_double(argv[2], &jr) != NP_OK)
+			return reply_error(c, r, "%d $jerk: not a number", CONSOLE_E_NUMBER);
+		if (!vehicle_set_jerk(c->v, jt, jr))
+			return reply_error(c, r,
+					   "%d $jerk: %s %s exceeds the limits or is below what "
+					   "the tick rate holds",
+					   CONSOLE_E_EXTRA, argv[1], argv[2]);
+	}
+	vehicle_jerk(c->v, &jt, &jr);
+	const vs_config_t *cfg = &c->v->cfg;
+	const double vals[4] = {jt, jr, cfg->jerk_limit_t_mm_s3, cfg->jerk_limit_r_deg_s3};
+	rb_puts(r, "ok jerk");
+	for (int i = 0; i < 4; i++) {
+		rb_puts(r, i == 2 ? " limit " : " ");
+		rb_double(r, vals[i]);
+	}
+	return true;
+}
+
 static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_t *r)
 {
 	const char *cmd = argv[0];
@@ -440,6 +468,8 @@ static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_
 		rb_printf(r, "ok watchdog %lu", (unsigned long)vehicle_link_timeout(c->v));
 		return true;
 	}
+	if (np_streq_nocase(cmd, "$jerk"))
+		return exec_jerk(c, argv, ntok, r);
 	if (np_streq_nocase(cmd, "$version") || np_streq_nocase(cmd, "$diag")) {
 		if (ntok != 1)
 			return reply_error(c, r, "%d %s takes 0 arguments, got %u", CONSOLE_E_ARITY,

@@ -1,0 +1,395 @@
+/* Jerk-limited profiles: the rest-to-rest S-curve (traj_sc_*) and the
+ * jerk-limited change of speed (traj_jslew), from their per-tick traces. */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+#include <cmocka.h>
+
+#include "firmware/motion.h"
+#include "firmware/traj.h"
+
+static const double Q = 4294967296.0;
+
+/* Per-tick limits in raw units from per-second ones at hz. */
+static q32_t per_tick(double x, double hz, int order)
+{
+	return (q32_t)(x * Q / pow(hz, order));
+}
+
+typedef struct {
+	int64_t ticks;
+	q32_t sum, vmax, amax, jmax; /* largest |speed|, |accel|, |jerk| seen */
+} trace_t;
+
+/* Runs a plan to its end, with rest before and after (a stop is a speed,
+ * acceleration and jerk like any other). */
+static trace_t run_sc(traj_sc_t *p)
+{
+	trace_t t = {0};
+	q32_t u1 = 0, a1 = 0;
+	for (int64_t k = 0; k < p->ticks + 3; k++) {
+		q32_t u = traj_sc_next(p);
+		q32_t a = u - u1, j = a - a1;
+		if (u != 0)
+			t.ticks = k + 1;
+		t.sum += u;
+		t.vmax = u > t.vmax ? u : t.vmax;
+		t.amax = llabs(a) > t.amax ? llabs(a) : t.amax;
+		t.jmax = llabs(j) > t.jmax ? llabs(j) : t.jmax;
+		u1 = u;
+		a1 = a;
+	}
+	return t;
+}
+
+/* The closed-form time of the continuous 7-segment rest-to-rest profile. */
+static double seven_seg_time(double d, double v, double a, double j)
+{
+	double tj = fmin(a / j, fmin(sqrt(v / j), cbrt(d / (2 * j))));
+	double ap = j * tj; /* peak acceleration */
+	double ta = fmax(tj, fmin(v / ap, (-tj + sqrt(tj * tj + 4 * d / ap)) / 2));
+	double tv = fmax(d / (ap * ta), ta + tj);
+	return tv + ta + tj;
+}
+
+/* 1000 mm at 500 mm/s, 500 mm/s^2, 2000 mm/s^3 (1 kHz) reaches all three
+ * limits: Tj = A / J = 0.25 s, Ta = V / A = 1 s, Tv = d / V = 2 s, 3.25 s in
+ * all. Whole ticks: Nj = 250 needs Nv >= d / (Jm Na Nj) = 2001.2, so 2002
+ * (Jm = 8589 - 4 raw), 3252 boxes in all and 3250 ticks; Nj = 251 gives Nv =
+ * 2001 (the speed margin: d / (V - 1) = 2000.000001), the same 3250. */
+static void test_sc_all_limits_reached(void **state)
+{
+	(void)state;
+	traj_sc_t p;
+	q32_t d = (q32_t)1000 << 32;
+	q32_t v = per_tick(500, 1000, 1), a = per_tick(500, 1000, 2), j = per_tick(2000, 1000, 3);
+	assert_true(traj_sc_plan(&p, d, v, a, j));
+	assert_int_equal(p.ticks, 3250);
+	assert_int_equal(p.na, 1000);
+	trace_t t = run_sc(&p);
+	assert_int_equal(t.sum, d);
+	assert_int_equal(t.ticks, 3250);
+	assert_true(t.vmax <= v);
+	assert_true(t.amax <= a);
+	assert_true(t.jmax <= j);
+	/* Jerk binds: the profile's own speed, acceleration and jerk are
+	 * d / Nv, d / (Nv Na) and d / P, to the rounding. */
+	assert_true(llabs(t.vmax - d / p.nv) <= 1);
+	assert_true(llabs(t.amax - d / (p.nv * p.na)) <= 2);
+	assert_true(llabs(t.jmax - d / p.p) <= 4);
+}
+
+static int64_t cdiv(__int128 n, __int128 m)
+{
+	return (int64_t)((n + m - 1) / m);
+}
+
+/* The shortest triple by exhaustive search, for small profiles (the
+ * constraints of traj.h, section 4, with the rounding margins). */
+static int64_t brute_ticks(q32_t d, q32_t v, q32_t a, q32_t j)
+{
+	int64_t vm = v - 1, am = a - 2, jm = j - 4, best = INT64_MAX;
+	for (int64_t nj = 1; nj <= 250; nj++)
+		for (int64_t na = nj; na <= 600; na++) {
+			int64_t nv = na + nj;
+			nv = fmax(nv, cdiv(d, vm));
+			nv = fmax(nv, cdiv(d, (__int128)am * na));
+			nv = fmax(nv, cdiv(d, (__int128)jm * na * nj));
+			if (nv + na + nj - 2 < best)
+				best = nv + na + nj - 2;
+		}
+	return best;
+}
+
+/* Random limits and distances: the plan lands on d exactly, never exceeds
+ * a limit on any tick, and takes the shortest whole-tick profile. */
+static void test_sc_random_against_brute_force(void **state)
+{
+	(void)state;
+	srand(7);
+	for (int i = 0; i < 150; i++) {
+		double hz = 250; /* phases of tens of ticks: the search is short */
+		double vv = 20 + rand() % 480, aa = 500 + rand() % 2000, jj = 5000 + rand() % 20000;
+		double dd = 0.01 + (rand() % 30000) / 1000.0;
+		q32_t v = per_tick(vv, hz, 1), a = per_tick(aa, hz, 2), j = per_tick(jj, hz, 3);
+		q32_t d = (q32_t)(dd * Q);
+		traj_sc_t p;
+		assert_true(traj_sc_plan(&p, d, v, a, j));
+		trace_t t = run_sc(&p);
+		assert_int_equal(t.sum, d);
+		assert_true(t.vmax <= v);
+		assert_true(t.amax <= a);
+		assert_true(t.jmax <= j);
+		assert_int_equal(t.ticks, p.ticks);
+		/* Inside the search's bounds (a shorter triple would lie there). */
+		assert_true(p.nj < 250 && p.na < 600);
+		assert_int_equal(p.ticks, brute_ticks(d, v, a, j));
+	}
+}
+
+/* Against the closed-form 7-segment time: within 2 % for moves of 0.1 s
+ * or more, and never shorter by more than the sampling's 3 ticks. */
+static void test_sc_time_optimal(void **state)
+{
+	(void)state;
+	srand(11);
+	double worst = 0;
+	for (int i = 0; i < 2000; i++) {
+		double hz = (i & 1) ? 1000 : 500;
+		double vv = 5 + rand() % 2000, aa = 10 + rand() % 5000, jj = 100 + rand() % 50000;
+		double dd = 0.5 + (rand() % 5000000) / 1000.0;
+		q32_t v = per_tick(vv, hz, 1), a = per_tick(aa, hz, 2), j = per_tick(jj, hz, 3);
+		traj_sc_t p;
+		assert_true(traj_sc_plan(&p, (q32_t)(dd * Q), v, a, j));
+		/* The limits the plan works to, per tick. */
+		double t7 = seven_seg_time(dd, v / Q, a / Q, j / Q);
+		assert_true((double)p.ticks >= t7 - 3);
+		if (t7 >= hz / 10) {
+			double r = (double)p.ticks / t7;
+			if (r > worst)
+				worst = r;
+			assert_true(r <= 1.02);
+		}
+	}
+	printf("S-curve: worst whole-tick time %.4f of the 7-segment closed form\n", worst);
+}
+
+/* A change of speed: exact landing on the target, |acc| <= amax,
+ * |jerk| <= j, and an acceleration pointing away is turned round first. */
+static void test_jslew_lands_on_target(void **state)
+{
+	(void)state;
+	q32_t amax = per_tick(1000, 1000, 2), j = per_tick(5000, 1000, 3);
+	q32_t v = per_tick(800, 1000, 1), acc = amax / 2; /* accelerating */
+	q32_t a1 = acc;
+	int ticks = 0;
+	while ((v != 0 || acc != 0) && ticks < 100000) {
+		traj_jslew(&v, &acc, 0, amax, j);
+		assert_true(llabs(acc) <= amax);
+		assert_true(llabs(acc - a1) <= j);
+		assert_true(v >= 0);
+		a1 = acc;
+		ticks++;
+	}
+	assert_int_equal(v, 0);
+	assert_int_equal(acc, 0);
+	/* 800 mm/s from +500 mm/s^2: 0.1 s to turn the acceleration to 0 (+25
+	 * mm/s), 0.2 s to reach -1000 (-100 mm/s), 0.625 s at -1000 and 0.2 s to
+	 * release (-100 mm/s): 1.125 s in continuous time, and as many ticks. */
+	assert_int_equal(ticks, 1125);
+}
+
+/* The motion engine with jerk limits: 1 kHz, a differential base, moves at
+ * 500 mm/s, 500 mm/s^2, 2000 mm/s^3 and 90 deg/s, 180 deg/s^2, 1000 deg/s^3;
+ * stops at the limits 1000 mm/s^2 (360 deg/s^2) reached at 5000 mm/s^3
+ * (3000 deg/s^3). The reference is fed back as the measured pose. */
+typedef struct {
+	motion_t m;
+	q32_t u1[3], a1[3];	    /* last speed and acceleration per axis */
+	q32_t vmax[3], amax[3], jmax[3]; /* largest seen */
+	int64_t moving_ticks;
+} jrig_t;
+
+static void jrig_init(jrig_t *r, motion_kin_t kin)
+{
+	motion_params_t p = {
+	    .tick_hz = 1000,
+	    .kin = kin,
+	    .vel_limit_t = (q32_t)1000 << 32,
+	    .vel_limit_r = (q32_t)180 << 32,
+	    .acc_limit_t = (q32_t)1000 << 32,
+	    .acc_limit_r = (q32_t)360 << 32,
+	    .jerk_limit_t = (q32_t)5000 << 32,
+	    .jerk_limit_r = (q32_t)3000 << 32,
+	    .cruise_blend_mm = (q32_t)200 << 32,
+	};
+	*r = (jrig_t){0};
+	motion_init(&r->m, &p);
+	motion_set_velocity(&r->m, (q32_t)500 << 32, (q32_t)90 << 32);
+	motion_set_accel(&r->m, (q32_t)500 << 32, (q32_t)180 << 32);
+	motion_set_jerk(&r->m, (q32_t)2000 << 32, (q32_t)1000 << 32);
+}
+
+static void jrig_reset_peaks(jrig_t *r)
+{
+	for (int i = 0; i < 3; i++)
+		r->vmax[i] = r->amax[i] = r->jmax[i] = 0;
+}
+
+static void jrig_tick(jrig_t *r)
+{
+	fx_twist_t t;
+	fx_pose_t meas = r->m.ref;
+	motion_tick(&r->m, &meas, &t);
+	const q32_t u[3] = {t.vx_pt, t.vy_pt, t.w_pt};
+	bool moving = false;
+	for (int i = 0; i < 3; i++) {
+		q32_t a = u[i] - r->u1[i], j = a - r->a1[i];
+		moving = moving || u[i] != 0;
+		r->vmax[i] = llabs(u[i]) > r->vmax[i] ? llabs(u[i]) : r->vmax[i];
+		r->amax[i] = llabs(a) > r->amax[i] ? llabs(a) : r->amax[i];
+		r->jmax[i] = llabs(j) > r->jmax[i] ? llabs(j) : r->jmax[i];
+		r->u1[i] = u[i];
+		r->a1[i] = a;
+	}
+	r->moving_ticks += moving;
+}
+
+static void jrig_run(jrig_t *r, int max_ticks)
+{
+	for (int i = 0; i < max_ticks && motion_has_work(&r->m); i++)
+		jrig_tick(r);
+	jrig_tick(r); /* the tick at rest closes the last acceleration */
+	assert_false(motion_has_work(&r->m));
+}
+
+/* moveForward 1000 mm: the S-curve of test_sc_all_limits_reached, 3250
+ * ticks, landing on x = 1000 mm to the raw unit, within the set speed,
+ * acceleration and jerk on every tick, the stop included. */
+static void test_forward_s_curve(void **state)
+{
+	(void)state;
+	jrig_t r;
+	jrig_init(&r, MOTION_KIN_DIFF);
+	assert_true(motion_forward(&r.m, (q32_t)1000 << 32));
+	jrig_run(&r, 10000);
+	assert_int_equal(r.m.ref.x_mm, (q32_t)1000 << 32);
+	assert_int_equal(r.m.ref.y_mm, 0);
+	assert_int_equal(r.moving_ticks, 3250);
+	assert_true(r.vmax[0] <= r.m.v_t_pt);
+	assert_true(r.amax[0] <= r.m.a_t_pt2);
+	assert_true(r.jmax[0] <= r.m.j_t_pt3);
+}
+
+/* A turn runs on the rotational limits: 90 degrees at 90 deg/s, 180
+ * deg/s^2, 1000 deg/s^3 lands exactly, and the heading never outruns them. */
+static void test_turn_s_curve(void **state)
+{
+	(void)state;
+	jrig_t r;
+	jrig_init(&r, MOTION_KIN_DIFF);
+	assert_true(motion_turn(&r.m, (q32_t)90 << 32));
+	jrig_run(&r, 10000);
+	assert_int_equal(r.m.ref.th_deg, (q32_t)90 << 32);
+	assert_true(r.vmax[2] <= r.m.v_r_pt);
+	assert_true(r.amax[2] <= r.m.a_r_pt2);
+	assert_true(r.jmax[2] <= r.m.j_r_pt3);
+	/* Tj = 0.18 s, Ta = 0.5 s, Tv = 1 s: 1.68 s. Whole ticks (Jm = 4294 -
+	 * 4 raw): Nj = 180, Na = 500 need Nv >= 90 deg / (Jm Na Nj) = 1001.2, so
+	 * 1002, and 1002 + 500 + 180 - 2 = 1680 ticks. */
+	assert_int_equal(r.moving_ticks, 1680);
+}
+
+/* pause mid-move brakes at the acceleration limit reached at the jerk
+ * limit, resume plans the rest from rest, and the move still lands. */
+static void test_pause_resume_s_curve(void **state)
+{
+	(void)state;
+	jrig_t r;
+	jrig_init(&r, MOTION_KIN_DIFF);
+	assert_true(motion_forward(&r.m, (q32_t)1000 << 32));
+	for (int i = 0; i < 700; i++) /* accelerating (Ta + Tj = 1.25 s) */
+		jrig_tick(&r);
+	assert_true(r.a1[0] > 0);
+	motion_pause(&r.m);
+	jrig_reset_peaks(&r);
+	int brake = 0;
+	while (motion_is_moving(&r.m) && brake < 5000) {
+		jrig_tick(&r);
+		brake++;
+	}
+	assert_true(r.amax[0] <= r.m.amax_t_pt2);
+	assert_true(r.jmax[0] <= r.m.jmax_t_pt3);
+	assert_true(r.amax[0] > r.m.a_t_pt2); /* harder than the set value */
+	for (int i = 0; i < 100; i++)
+		jrig_tick(&r);
+	assert_int_equal(r.u1[0], 0);
+	motion_resume(&r.m);
+	jrig_reset_peaks(&r);
+	jrig_run(&r, 10000);
+	assert_int_equal(r.m.ref.x_mm, (q32_t)1000 << 32);
+	assert_true(r.amax[0] <= r.m.a_t_pt2);
+	assert_true(r.jmax[0] <= r.m.j_t_pt3);
+}
+
+/* No stale profile state: a stop while accelerating, then a new move. The
+ * new move's first tick starts from rest with zero acceleration, so its
+ * first speed is at most one jerk step. */
+static void test_stop_then_move_starts_clean(void **state)
+{
+	(void)state;
+	jrig_t r;
+	jrig_init(&r, MOTION_KIN_DIFF);
+	assert_true(motion_forward(&r.m, (q32_t)1000 << 32));
+	for (int i = 0; i < 300; i++)
+		jrig_tick(&r);
+	motion_stop(&r.m);
+	jrig_reset_peaks(&r);
+	jrig_run(&r, 10000);
+	assert_true(r.jmax[0] <= r.m.jmax_t_pt3);
+	assert_int_equal(r.m.acc, 0);
+	q32_t x0 = r.m.ref.x_mm;
+	assert_true(motion_forward(&r.m, (q32_t)200 << 32));
+	jrig_reset_peaks(&r);
+	jrig_tick(&r);
+	assert_true(r.u1[0] > 0 && r.u1[0] <= r.m.j_t_pt3);
+	jrig_run(&r, 10000);
+	assert_int_equal(r.m.ref.x_mm, x0 + ((q32_t)200 << 32));
+	assert_true(r.jmax[0] <= r.m.j_t_pt3);
+}
+
+/* A speed cap lowered under a planned move (the caution input) is never
+ * exceeded for long: the unit brakes to rest at the limits, plans the rest
+ * at the cap, and lands. */
+static void test_caution_cap_mid_move(void **state)
+{
+	(void)state;
+	jrig_t r;
+	jrig_init(&r, MOTION_KIN_DIFF);
+	assert_true(motion_forward(&r.m, (q32_t)1000 << 32));
+	for (int i = 0; i < 1500; i++) /* cruising at 500 mm/s */
+		jrig_tick(&r);
+	motion_set_caution(&r.m, (q32_t)200 << 32);
+	jrig_reset_peaks(&r);
+	jrig_run(&r, 20000);
+	assert_int_equal(r.m.ref.x_mm, (q32_t)1000 << 32);
+	assert_true(r.jmax[0] <= r.m.jmax_t_pt3);
+	assert_true(r.amax[0] <= r.m.amax_t_pt2);
+}
+
+/* jerk 0 is today's acceleration-limited profile: the acceleration steps
+ * to the limit on the first tick. */
+static void test_jerk_zero_is_unlimited(void **state)
+{
+	(void)state;
+	jrig_t r;
+	jrig_init(&r, MOTION_KIN_DIFF);
+	motion_set_jerk(&r.m, 0, 0);
+	assert_true(motion_forward(&r.m, (q32_t)100 << 32));
+	jrig_tick(&r);
+	assert_int_equal(r.u1[0], r.m.a_t_pt2);
+	jrig_run(&r, 10000);
+	assert_int_equal(r.m.ref.x_mm, (q32_t)100 << 32);
+}
+
+int main(void)
+{
+	const struct CMUnitTest tests[] = {
+	    cmocka_unit_test(test_sc_all_limits_reached),
+	    cmocka_unit_test(test_sc_random_against_brute_force),
+	    cmocka_unit_test(test_sc_time_optimal),
+	    cmocka_unit_test(test_jslew_lands_on_target),
+	    cmocka_unit_test(test_forward_s_curve),
+	    cmocka_unit_test(test_turn_s_curve),
+	    cmocka_unit_test(test_pause_resume_s_curve),
+	    cmocka_unit_test(test_stop_then_move_starts_clean),
+	    cmocka_unit_test(test_caution_cap_mid_move),
+	    cmocka_unit_test(test_jerk_zero_is_unlimited),
+	};
+	return cmocka_run_group_tests(tests, NULL, NULL);
+}
