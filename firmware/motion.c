@@ -170,6 +170,7 @@ void motion_halt(motion_t *m)
 	m->acc = 0;
 	m->sc_on = false;
 	m->vel = (fx_twist_t){0};
+	m->vacc = (fx_twist_t){0};
 	m->vtarget = (fx_twist_t){0};
 	m->stopping = false;
 	m->paused = false;

@@ -145,8 +145,9 @@ typedef struct {
 	bool sc_on;
 	q32_t acc;
 
-	/* Jog / joystick velocity target (body frame, per tick). */
-	fx_twist_t vtarget;
+	/* Jog / joystick velocity target (body frame, per tick), and the last
+	 * tick's change of velocity (the jerk-limited slew's state). */
+	fx_twist_t vtarget, vacc;
 	uint32_t jog_age_ticks;
 	/* Continuous mode goal (world frame). */
 	fx_pose_t goal;

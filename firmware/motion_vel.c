@@ -108,6 +108,34 @@ static void slew_rates(const motion_t *m, bool braking, q32_t *at, q32_t *ar)
 	}
 }
 
+/* 2^30 / sqrt(2), rounded down: an omni base's translation axes each get
+ * this share of the limits under a jerk limit, so that the vector never
+ * exceeds them. */
+#define INV_SQRT2_Q30 ((int32_t)759250124)
+
+/* Jerk-limited slew of the velocity modes (traj.h, section 5), per axis:
+ * the jerks (set ones, or the limits braking) for translation and rotation,
+ * 0 for an axis without one (the acceleration-limited slew). */
+static void jerk_slew(motion_t *m, const fx_twist_t *tgt, q32_t at, q32_t ar, bool braking)
+{
+	q32_t jt = braking ? m->jmax_t_pt3 : m->j_t_pt3;
+	q32_t jr = braking ? m->jmax_r_pt3 : m->j_r_pt3;
+	if (jt > 0 && m->p.kin == MOTION_KIN_OMNI) {
+		/* Rounded down (per-tick values are far below 2^33). */
+		at = (at * INV_SQRT2_Q30) >> 30;
+		jt = (jt * INV_SQRT2_Q30) >> 30;
+		traj_jslew(&m->vel.vy_pt, &m->vacc.vy_pt, tgt->vy_pt, at, jt);
+	}
+	if (jt > 0)
+		traj_jslew(&m->vel.vx_pt, &m->vacc.vx_pt, tgt->vx_pt, at, jt);
+	else
+		slew2(&m->vel.vx_pt, &m->vel.vy_pt, tgt->vx_pt, tgt->vy_pt, at);
+	if (jr > 0)
+		traj_jslew(&m->vel.w_pt, &m->vacc.w_pt, tgt->w_pt, ar, jr);
+	else
+		m->vel.w_pt = slew(m->vel.w_pt, tgt->w_pt, ar);
+}
+
 /* Jog and joystick: slew toward the target velocity. */
 void motion_velocity_tick(motion_t *m, fx_twist_t *out)
 {
@@ -124,10 +152,16 @@ void motion_velocity_tick(motion_t *m, fx_twist_t *out)
 	tgt.vx_pt = fx_clamp64(tgt.vx_pt, -vt, vt);
 	tgt.vy_pt = fx_clamp64(tgt.vy_pt, -vt, vt);
 	tgt.w_pt = fx_clamp64(tgt.w_pt, -m->v_r_pt, m->v_r_pt);
-	slew2(&m->vel.vx_pt, &m->vel.vy_pt, tgt.vx_pt, tgt.vy_pt, at);
-	m->vel.w_pt = slew(m->vel.w_pt, tgt.w_pt, ar);
+	if (m->j_t_pt3 | m->j_r_pt3) {
+		jerk_slew(m, &tgt, at, ar, braking);
+	} else {
+		slew2(&m->vel.vx_pt, &m->vel.vy_pt, tgt.vx_pt, tgt.vy_pt, at);
+		m->vel.w_pt = slew(m->vel.w_pt, tgt.w_pt, ar);
+	}
 	*out = m->vel;
 	if (twist_zero(&m->vel) && twist_zero(&tgt)) {
+		/* At rest: the acceleration the slew ended on is gone. */
+		m->vacc = (fx_twist_t){0};
 		bool jog_done = m->mode == MODE_JOG && (m->jog_age_ticks > m->jog_timeout_ticks ||
 							braking || twist_zero(&m->vtarget));
 		bool joystick_done = m->mode == MODE_JOYSTICK && m->stopping;

@@ -377,6 +377,57 @@ static void test_jerk_zero_is_unlimited(void **state)
 	assert_int_equal(r.m.ref.x_mm, (q32_t)100 << 32);
 }
 
+/* Jog under jerk limits: 300 mm/s and 45 deg/s reached with the set
+ * acceleration and jerk per axis, the watchdog's stop at the limits, and
+ * the mode ends at rest with no acceleration left over. */
+static void test_jog_s_curve(void **state)
+{
+	(void)state;
+	jrig_t r;
+	jrig_init(&r, MOTION_KIN_DIFF);
+	motion_set_jog_timeout_ms(&r.m, 2000);
+	assert_true(motion_jog(&r.m, (q32_t)300 << 32, 0, (q32_t)45 << 32));
+	for (int i = 0; i < 1500; i++)
+		jrig_tick(&r);
+	/* 300 mm/s at 500 mm/s^2 and 2000 mm/s^3: 0.85 s; 45 deg/s at 180
+	 * deg/s^2 and 1000 deg/s^3 (0.18 s ramps): 0.43 s. */
+	assert_int_equal(r.u1[0], ((q32_t)300 << 32) / 1000);
+	assert_int_equal(r.u1[2], ((q32_t)45 << 32) / 1000);
+	assert_true(r.amax[0] <= r.m.a_t_pt2 && r.jmax[0] <= r.m.j_t_pt3);
+	assert_true(r.amax[2] <= r.m.a_r_pt2 && r.jmax[2] <= r.m.j_r_pt3);
+	jrig_reset_peaks(&r);
+	jrig_run(&r, 10000); /* the watchdog runs out: a stop at the limits */
+	assert_true(r.amax[0] <= r.m.amax_t_pt2 && r.jmax[0] <= r.m.jmax_t_pt3);
+	assert_true(r.amax[2] <= r.m.amax_r_pt2 && r.jmax[2] <= r.m.jmax_r_pt3);
+	assert_int_equal(motion_mode(&r.m), MODE_IDLE);
+	assert_true(r.m.vacc.vx_pt == 0 && r.m.vacc.w_pt == 0);
+}
+
+/* An omni jog on the diagonal: the vector's acceleration and jerk stay
+ * within the limits (each axis holds 1 / sqrt(2) of them). */
+static void test_omni_jog_vector_limits(void **state)
+{
+	(void)state;
+	jrig_t r;
+	jrig_init(&r, MOTION_KIN_OMNI);
+	motion_set_jog_timeout_ms(&r.m, 5000);
+	assert_true(motion_jog(&r.m, (q32_t)300 << 32, (q32_t)300 << 32, 0));
+	q32_t ax1 = 0, ay1 = 0;
+	double amax = 0, jmax = 0;
+	for (int i = 0; i < 2000; i++) {
+		jrig_tick(&r);
+		q32_t ax = r.a1[0], ay = r.a1[1];
+		amax = fmax(amax, hypot((double)ax, (double)ay));
+		jmax = fmax(jmax, hypot((double)(ax - ax1), (double)(ay - ay1)));
+		ax1 = ax;
+		ay1 = ay;
+	}
+	assert_true(amax <= (double)r.m.a_t_pt2);
+	assert_true(jmax <= (double)r.m.j_t_pt3);
+	assert_int_equal(r.u1[0], ((q32_t)300 << 32) / 1000);
+	assert_int_equal(r.u1[1], ((q32_t)300 << 32) / 1000);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -390,6 +441,8 @@ int main(void)
 	    cmocka_unit_test(test_stop_then_move_starts_clean),
 	    cmocka_unit_test(test_caution_cap_mid_move),
 	    cmocka_unit_test(test_jerk_zero_is_unlimited),
+	    cmocka_unit_test(test_jog_s_curve),
+	    cmocka_unit_test(test_omni_jog_vector_limits),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }
