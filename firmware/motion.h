@@ -111,7 +111,7 @@ typedef struct {
 	q32_t v_t_pt, v_r_pt, a_t_pt2, a_r_pt2;
 	q32_t amax_t_pt2, amax_r_pt2, vmax_t_pt, vmax_r_pt;
 	q32_t j_t_pt3, j_r_pt3, jmax_t_pt3, jmax_r_pt3; /* jerks, 0 = unlimited */
-	q32_t cap_t_pt; /* caution cap, 0 = none */
+	q32_t cap_t_pt;					/* caution cap, 0 = none */
 	uint32_t jog_timeout_ticks;
 
 	fx_pose_t ref;	/* reference (commanded) pose */

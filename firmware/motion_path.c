@@ -621,8 +621,8 @@ static void path_tick(motion_t *m, fx_twist_t *out)
 			/* From rest to rest, a piece runs on the jerk-limited
 			 * profile; its limit is fixed for the piece. */
 			m->lim_j = m->v == 0 && !blends_onward(m, m->seg.kind)
-					   ? piece_jerk(&m->seg, m->j_t_pt3, m->j_r_pt3)
-					   : 0;
+				       ? piece_jerk(&m->seg, m->j_t_pt3, m->j_r_pt3)
+				       : 0;
 			limits_changed(m);
 			if (m->rest_tick) {
 				/* A stop is a tick at zero before the next piece: the

@@ -5,18 +5,18 @@
  * remainders below P in pairs. */
 #define SC_P_LIMIT ((int64_t)1 << 62)
 
-static int64_t mul_sat(int64_t x, int64_t y)
+/* x y for x, y > 0, saturating. Out of line: it is called from the
+ * search's loop, and inlined copies of 64-bit arithmetic cost flash on a
+ * 32-bit core. */
+static __attribute__((noinline)) int64_t mul_sat(int64_t x, int64_t y)
 {
-	if (x <= 0 || y <= 0)
-		return 0;
-	if (x > INT64_MAX / y)
-		return INT64_MAX;
-	return x * y;
+	return x > INT64_MAX / y ? INT64_MAX : x * y;
 }
 
+/* ceil(n / m) for n > 0, m > 0. */
 static int64_t ceil_div(int64_t n, int64_t m)
 {
-	return n / m + (n % m != 0);
+	return (n - 1) / m + 1;
 }
 
 /* Floor of the cube root, one bit of the root per step. */
@@ -35,7 +35,8 @@ static int64_t icbrt(uint64_t x)
 }
 
 /* The shortest Nv that a given Na, Nj allows (traj.h, section 4). */
-static int64_t sc_nv(const traj_sc_t *p, int64_t d, int64_t nv_v, int64_t na, int64_t nj)
+static __attribute__((noinline)) int64_t sc_nv(const traj_sc_t *p, int64_t d, int64_t nv_v,
+					       int64_t na, int64_t nj)
 {
 	int64_t nv = fx_max64(nv_v, na + nj);
 	nv = fx_max64(nv, ceil_div(d, mul_sat(p->am, na)));
@@ -48,7 +49,7 @@ static void sc_guess(const traj_sc_t *p, int64_t d, int64_t *tj, int64_t *ta)
 {
 	int64_t j = p->am / p->jm; /* the acceleration limit is reached */
 	j = fx_min64(j, (int64_t)fx_isqrt64((uint64_t)(p->vm / p->jm))); /* only the speed */
-	j = fx_min64(j, icbrt((uint64_t)(d / (2 * p->jm))));		  /* neither */
+	j = fx_min64(j, icbrt((uint64_t)(d / (2 * p->jm))));		 /* neither */
 	j = fx_max64(j, 1);
 	int64_t a = p->vm / p->am;
 	/* Acceleration reached, speed not: d = A ta (ta + tj). */
@@ -101,39 +102,30 @@ static int sc_pulse(const traj_sc_t *p, int64_t k)
 	return 0;
 }
 
+/* (q, r) += (dq, dr) over p, with r and dr in [0, p). */
+static inline void qr_add(int64_t *q, int64_t *r, int64_t dq, int64_t dr, int64_t p)
+{
+	*q += dq;
+	*r += dr;
+	if (*r >= p) {
+		*r -= p;
+		(*q)++;
+	}
+}
+
 q32_t traj_sc_next(traj_sc_t *p)
 {
 	if (p->k >= p->ticks)
 		return 0;
 	int pulse = sc_pulse(p, p->k++);
-	if (pulse > 0) {
-		p->aq += p->qd;
-		p->ar += p->rd;
-		if (p->ar >= p->p) {
-			p->ar -= p->p;
-			p->aq++;
-		}
-	} else if (pulse < 0) {
-		p->aq -= p->qd;
-		p->ar -= p->rd;
-		if (p->ar < 0) {
-			p->ar += p->p;
-			p->aq--;
-		}
-	}
-	p->cq += p->aq;
-	p->cr += p->ar;
-	if (p->cr >= p->p) {
-		p->cr -= p->p;
-		p->cq++;
-	}
+	/* -(qd, rd) is (-qd - 1, p - rd), or (-qd, 0) for rd = 0. */
+	if (pulse > 0)
+		qr_add(&p->aq, &p->ar, p->qd, p->rd, p->p);
+	else if (pulse < 0)
+		qr_add(&p->aq, &p->ar, -p->qd - (p->rd != 0), p->rd ? p->p - p->rd : 0, p->p);
+	qr_add(&p->cq, &p->cr, p->aq, p->ar, p->p);
 	q32_t before = p->sq;
-	p->sq += p->cq;
-	p->sr += p->cr;
-	if (p->sr >= p->p) {
-		p->sr -= p->p;
-		p->sq++;
-	}
+	qr_add(&p->sq, &p->sr, p->cq, p->cr, p->p);
 	return p->sq - before;
 }
 

@@ -20,9 +20,18 @@ enum {
 #include "commands.def"
 #undef VS_CMD
 
+/* A build short of flash (the Cortex-M4 board) leaves out the help lines:
+ * $help NAME then gives the signature alone. */
+#ifdef VS_NO_HELP_TEXT
+#define CMD_HELP(h) ""
+#else
+#define CMD_HELP(h) h
+#endif
+
 const cmd_def_t cmd_table[CMD_COUNT] = {
 #define VS_CMD(name, op, it, in, ot, on, help)                                                     \
-	{#name, op, (uint8_t)(sizeof(it) - 1), (uint8_t)(sizeof(ot) - 1), it, in, ot, on, help},
+	{#name,		op, (uint8_t)(sizeof(it) - 1), (uint8_t)(sizeof(ot) - 1), it, in, ot, on,  \
+	 CMD_HELP(help)},
 #include "commands.def"
 #undef VS_CMD
 };

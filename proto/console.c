@@ -402,10 +402,11 @@ static bool exec_jerk(console_t *c, char **argv, unsigned ntok, rbuf_t *r)
 {
 	double jt, jr;
 	if (ntok != 1 && ntok != 3)
-		return reply_error(c, r, "%d $jerk takes 0 or 2 arguments, got %u",
-				   CONSOLE_E_ARITY, ntok - 1);
+		return reply_error(c, r, "%d $jerk takes 0 or 2 arguments, got %u", CONSOLE_E_ARITY,
+				   ntok - 1);
 	if (ntok == 3) {
-		if (np_parse_double(argv[1], &jt) != NP_OK || np_parse_double(argv[2], &jr) != NP_OK)
+		if (np_parse_double(argv[1], &jt) != NP_OK ||
+		    np_parse_double(argv[2], &jr) != NP_OK)
 			return reply_error(c, r, "%d $jerk: not a number", CONSOLE_E_NUMBER);
 		if (!vehicle_set_jerk(c->v, jt, jr))
 			return reply_error(c, r,
@@ -445,14 +446,24 @@ static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_
 						   CONSOLE_E_EXTRA, argv[1]);
 			rb_printf(r, "ok %u ", d->opcode);
 			rb_signature(r, d);
-			rb_printf(r, ": %s", d->help);
+			if (d->help[0])
+				rb_printf(r, ": %s", d->help);
 			return true;
 		}
 		return reply_error(c, r, "%d $help takes 0 or 1 argument, got %u", CONSOLE_E_ARITY,
 				   ntok - 1);
 	}
-	if (np_streq_nocase(cmd, "$config"))
+	if (np_streq_nocase(cmd, "$config")) {
+#ifdef VS_NO_CONFIG_EXTRA
+		(void)exec_config;
+		return reply_error(c, r,
+				   "%d $config is not in this build (its configuration is "
+				   "compiled in: hal/cortexm/board_main.c)",
+				   CONSOLE_E_EXTRA);
+#else
 		return exec_config(c, argv, ntok, r);
+#endif
+	}
 	if (np_streq_nocase(cmd, "$watchdog")) {
 		/* The link watchdog's timeout: read, or set for this run (0 =
 		 * off; hands-on bring-up, a lockstep harness). */

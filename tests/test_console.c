@@ -741,7 +741,8 @@ static void test_config(void **state)
 	       "encoder_counts_per_rev vel_limit_t_mm_s vel_limit_r_deg_s acc_limit_t_mm_s2 "
 	       "acc_limit_r_deg_s2 vel_default_t_mm_s vel_default_r_deg_s acc_default_t_mm_s2 "
 	       "acc_default_r_deg_s2 jerk_limit_t_mm_s3 jerk_limit_r_deg_s3 "
-	       "jerk_default_t_mm_s3 jerk_default_r_deg_s3 jog_timeout_default_ms wheel_kp_per_s drive_lag_ms "
+	       "jerk_default_t_mm_s3 jerk_default_r_deg_s3 jog_timeout_default_ms wheel_kp_per_s "
+	       "drive_lag_ms "
 	       "following_error_mm encoder_stuck_ms drive_timeout_ms loop_late_ms link_timeout_ms "
 	       "position_window_mm position_window_ms settle_timeout_ms cruise_blend_mm "
 	       "caution_vel_t_mm_s battery_critical_v battery_low_v has_contact_sensor "
@@ -757,6 +758,17 @@ static void test_config(void **state)
 	EXPECT("$config has_estop", "ok has_estop true");
 	EXPECT("$CONFIG Joystick_Deadband", "ok joystick_deadband 0.050");
 	/* the running configuration: what $watchdog set, what init kept */
+	/* $jerk: read, set within the limits (none here), refused beyond */
+	EXPECT("$jerk", "ok jerk 0.000 0.000 limit 0.000 0.000");
+	EXPECT("$jerk 2000 1000", "ok jerk 2000.000 1000.000 limit 0.000 0.000");
+	EXPECT("$jerk 2000", "error 2 $jerk takes 0 or 2 arguments, got 1");
+	EXPECT("$jerk x 1", "error 3 $jerk: not a number");
+	EXPECT("$jerk -5 0", "error 8 $jerk: -5 0 exceeds the limits or is below what the tick "
+			     "rate holds");
+	EXPECT("$jerk 0.001 0", "error 8 $jerk: 0.001 0 exceeds the limits or is below what the "
+				"tick rate holds");
+	EXPECT("$jerk", "ok jerk 2000.000 1000.000 limit 0.000 0.000");
+	EXPECT("$jerk 0 0", "ok jerk 0.000 0.000 limit 0.000 0.000");
 	EXPECT("$watchdog 250", "ok watchdog 250");
 	EXPECT("$config link_timeout_ms", "ok link_timeout_ms 250");
 	veh.cfg.has_joystick = false;

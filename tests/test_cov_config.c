@@ -163,6 +163,26 @@ static expect_t mutate(int i, vs_config_t *c)
 	case 45:
 		c->settle_timeout_ms = 60001;
 		return (expect_t){-1, "settle_timeout_ms"};
+	case 46:
+		c->jerk_limit_t_mm_s3 = 1e7 + 1;
+		return (expect_t){-1, "jerk_limit_t_mm_s3"};
+	/* 1 kHz: 0.01 mm/s^3 is 43 raw units a tick^3, under the 64 held */
+	case 47:
+		c->jerk_limit_r_deg_s3 = 0.01;
+		return (expect_t){-2, "jerk_limit_r_deg_s3"};
+	case 48:
+		c->jerk_limit_t_mm_s3 = 5000.0;
+		c->jerk_default_t_mm_s3 = 5000.5;
+		return (expect_t){-2, "jerk_default_t_mm_s3"};
+	case 49:
+		c->jerk_default_r_deg_s3 = -1.0;
+		return (expect_t){-1, "jerk_default_r_deg_s3"};
+	/* 10 kHz: 1000 mm/s^3 is 4.3 raw units a tick^3 */
+	case 50:
+		c->tick_hz = 10000;
+		c->wheel_kp_per_s = 20.0;
+		c->jerk_default_t_mm_s3 = 1000.0;
+		return (expect_t){-2, "jerk_default_t_mm_s3"};
 	default:
 		return (expect_t){0, NULL};
 	}
@@ -188,7 +208,7 @@ static void test_each_rule(void **state)
 		assert_non_null(field);
 		assert_string_equal(field, e.field);
 	}
-	assert_int_equal(i, 46);
+	assert_int_equal(i, 51);
 }
 
 static void test_range_ends_accepted(void **state)

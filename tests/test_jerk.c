@@ -190,7 +190,7 @@ static void test_jslew_lands_on_target(void **state)
  * (3000 deg/s^3). The reference is fed back as the measured pose. */
 typedef struct {
 	motion_t m;
-	q32_t u1[3], a1[3];	    /* last speed and acceleration per axis */
+	q32_t u1[3], a1[3];		 /* last speed and acceleration per axis */
 	q32_t vmax[3], amax[3], jmax[3]; /* largest seen */
 	int64_t moving_ticks;
 } jrig_t;
