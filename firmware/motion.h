@@ -121,6 +121,7 @@ typedef struct {
 	bool stopping;	/* stop(): decelerating, then discard */
 	bool joystick;	/* joystick enabled */
 	bool lim_ok;	/* lim_* below hold for the active piece */
+	bool settle;	/* a motion ended at rest last tick (motion_tick) */
 
 	motion_cmd_t q[MOTION_QUEUE_LEN];
 	uint8_t q_head, q_count;

@@ -481,10 +481,23 @@ static q32_t sc_speed(motion_t *m, bool braking)
 		m->sc_on = false;
 	if (braking || (!m->sc_on && m->v > 0)) {
 		m->sc_on = false;
-		q32_t v = m->v;
-		traj_jslew(&v, &m->acc, 0, piece_limit(&m->seg, m->amax_t_pt2, m->amax_r_pt2),
-			   piece_jerk(&m->seg, m->jmax_t_pt3, m->jmax_r_pt3));
+		q32_t v = m->v, amax = piece_limit(&m->seg, m->amax_t_pt2, m->amax_r_pt2);
+		q32_t jb = piece_jerk(&m->seg, m->jmax_t_pt3, m->jmax_r_pt3);
+		if (jb > 0) {
+			traj_jslew(&v, &m->acc, 0, amax, jb);
+		} else { /* no jerk limit to brake at: as without */
+			v = fx_max64(v - amax, 0);
+			m->acc = v - m->v;
+		}
+		/* The fastest way to rest is never slower than the plan, which
+		 * stops by the end: this only guards the raw unit. */
 		return fx_min64(v, rem);
+	}
+	if (!m->sc_on && m->acc != 0) {
+		/* The brake landed last tick (its last change of speed up to
+		 * the braking jerk): a tick at rest before the plan starts. */
+		m->acc = 0;
+		return 0;
 	}
 	if (!m->sc_on) {
 		if (!traj_sc_plan(&m->sc, rem, m->lim_vmax, m->lim_a, m->lim_j)) {
@@ -671,6 +684,16 @@ static void path_tick(motion_t *m, fx_twist_t *out)
 void motion_tick(motion_t *m, const fx_pose_t *measured, fx_twist_t *out)
 {
 	*out = (fx_twist_t){0};
+	uint8_t mode_before = m->mode;
+	if (m->settle) {
+		/* A motion ended at rest last tick, its last change of speed
+		 * up to the braking jerk: one tick at rest before the next. */
+		m->settle = false;
+		if (m->mode != MODE_IDLE) {
+			m->vel = (fx_twist_t){0};
+			return;
+		}
+	}
 	switch (m->mode) {
 	case MODE_PATH:
 		path_tick(m, out);
@@ -692,6 +715,10 @@ void motion_tick(motion_t *m, const fx_pose_t *measured, fx_twist_t *out)
 			m->ref = *measured;
 		break;
 	}
+	/* Without jerk limits a stop's last step is a change of speed like
+	 * any other: no settling tick (today's profiles, bit for bit). */
+	m->settle = mode_before != MODE_IDLE && m->mode == MODE_IDLE &&
+		    (m->j_t_pt3 | m->j_r_pt3 | m->jmax_t_pt3 | m->jmax_r_pt3) != 0;
 	/* A velocity mode that ended hands over to queued path commands. */
 	if (m->mode == MODE_IDLE && m->q_count > 0)
 		m->mode = MODE_PATH;

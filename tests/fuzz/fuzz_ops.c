@@ -7,6 +7,9 @@
  *     fault is active, never Avoid;
  *   - the commanded body velocity stays within getVelocityLimit, and while
  *     the servo stays on it changes by at most getAccelerationLimit;
+ *   - under jerk limits, the motions that honour them (differential path
+ *     moves from rest to rest, jog and joystick, their stops and pauses)
+ *     change that acceleration by at most the jerk limit;
  *     a differential base never gets y velocity;
  *   - a fault or power off leaves every drive disabled with a zero setpoint;
  *   - a unit that came to rest stays at rest (zero command, plant pose
@@ -14,8 +17,9 @@
  *     (move*, resume, setJoystick(true)).
  *
  * Input bytes: a sequence of actions, each an action byte and its argument
- * bytes (missing bytes read as 0). Byte 0 picks the base (bit 0: mecanum)
- * and the corner planning budget (bits 1-2; 0: whole passes).
+ * bytes (missing bytes read as 0). Byte 0 picks the base (bit 0: mecanum),
+ * the corner planning budget (bits 1-2; 0: whole passes) and jerk limits
+ * (bit 3: 5000 mm/s^3 and 3000 deg/s^3, moves at 2000 and 1000).
  */
 #include <math.h>
 #include <stdint.h>
@@ -71,7 +75,8 @@ static sim_t S;
 static bool armed; /* a command may be moving the unit */
 static double rest_x, rest_y, rest_th;
 static bool have_rest;
-static fx_twist_t prev_cmd;
+static fx_twist_t prev_cmd, prev_acc;
+static unsigned jerk_run;    /* ticks in a row that the jerk bound holds over */
 static double prev_world[2]; /* previous commanded translation, world frame */
 static bool prev_servo;
 /* A frozen encoder was injected: the wheel loop then drives that wheel
@@ -142,6 +147,47 @@ static void check_state(void)
 	}
 }
 
+/* Whether the tick just run is one of a motion that honours the jerk
+ * limits (or rest): moves on the jerk-limited profile (lim_j) on a
+ * differential base, and the velocity modes with a jerk set (their stops
+ * reach the acceleration limit at the jerk limit). */
+static bool jerk_applies(const vehicle_t *v, const fx_twist_t *t)
+{
+	const motion_t *m = &v->motion;
+	if (!v->servo || alarm_any_fault(&v->alarms) || m->jmax_t_pt3 == 0)
+		return false;
+	switch (motion_mode(m)) {
+	case MODE_IDLE:
+		return twist_zero(t);
+	case MODE_PATH:
+		return S.cfg.kinematics == VS_KIN_DIFF && (m->lim_j > 0 || twist_zero(t));
+	case MODE_JOG:
+	case MODE_JOYSTICK:
+		return m->j_t_pt3 > 0 && m->j_r_pt3 > 0;
+	default:
+		return false;
+	}
+}
+
+static void check_jerk(const vehicle_t *v, const fx_twist_t *t)
+{
+	const motion_t *m = &v->motion;
+	fx_twist_t acc = {t->vx_pt - prev_cmd.vx_pt, t->vy_pt - prev_cmd.vy_pt,
+			  t->w_pt - prev_cmd.w_pt};
+	bool applies = jerk_applies(v, t) && prev_servo;
+	/* The set jerk while moving, the limit while braking: the larger
+	 * bounds both. 16 raw units of slack, as for the acceleration. */
+	double jt = (double)fx_max64(m->j_t_pt3, m->jmax_t_pt3) + 16;
+	double jr = (double)fx_max64(m->j_r_pt3, m->jmax_r_pt3) + 16;
+	if (applies && jerk_run >= 2 &&
+	    (fabs((double)(acc.vx_pt - prev_acc.vx_pt)) > jt ||
+	     fabs((double)(acc.vy_pt - prev_acc.vy_pt)) > jt ||
+	     fabs((double)(acc.w_pt - prev_acc.w_pt)) > jr))
+		abort(); /* jerk limit */
+	jerk_run = applies ? jerk_run + 1 : 0;
+	prev_acc = acc;
+}
+
 static void check_tick(void)
 {
 	vehicle_t *v = &S.vehicle;
@@ -188,6 +234,7 @@ static void check_tick(void)
 	if (prev_servo && v->servo &&
 	    (trans_over || fabs((double)(t->w_pt - prev_cmd.w_pt)) > ar_lim))
 		abort(); /* acceleration limit */
+	check_jerk(v, t);
 	prev_world[0] = wx;
 	prev_world[1] = wy;
 	if (alarm_any_fault(&v->alarms) || !v->powered) {
@@ -410,6 +457,9 @@ static bool act(rd_t *r, unsigned *ticks)
 	case 35:
 		plant_set_input(pl, u8(r) % 6, u32(r));
 		break;
+	case 36: /* $jerk */
+		vehicle_set_jerk(v, dbl(r), dbl(r));
+		break;
 	/* time: most actions are ticks */
 	default: {
 		unsigned n = 1u + (unsigned)u8(r) * ((a & 1) ? 8u : 1u);
@@ -438,6 +488,12 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 		cfg.wheel_base_mm = 400.0;
 	}
 	plan_budget = (setup >> 1) & 3;
+	if (setup & 8) {
+		cfg.jerk_limit_t_mm_s3 = 5000.0;
+		cfg.jerk_limit_r_deg_s3 = 3000.0;
+		cfg.jerk_default_t_mm_s3 = 2000.0;
+		cfg.jerk_default_r_deg_s3 = 1000.0;
+	}
 	plant_params_ideal(&pp);
 	plant_config_lag(&pp, &cfg);
 	if (sim_init(&S, &cfg, &pp) != 0)
@@ -448,6 +504,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	encoder_frozen = false;
 	prev_servo = false;
 	prev_cmd = (fx_twist_t){0, 0, 0};
+	prev_acc = (fx_twist_t){0, 0, 0};
+	jerk_run = 0;
 	prev_world[0] = prev_world[1] = 0;
 	for (unsigned k = 0; k < MAX_ACTIONS && r.i < r.n; k++) {
 		bool go = act(&r, &ticks);

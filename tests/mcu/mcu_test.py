@@ -686,7 +686,7 @@ REQUESTS = [
     "stop", "setJoystick on", "moveForward 10", "setJoystick off", "setServo false",
     "moveForward 10", "setPower false", "setServo true",
     "getActiveAlarm 32767", "clearAlarm", "$help", "$help moveContinuousRel", "$version",
-    "$diag", "$link", "$config", "$config joystick_deadband",
+    "$diag", "$link", "$jerk", "$jerk 0 0",
 ]
 
 
