@@ -163,7 +163,8 @@ bool vs_jerk_fits(const vs_config_t *c, double j, double limit)
 		return true;
 	/* At least 64 raw units a tick^3: the profiles keep 4 below the limit
 	 * for rounding (traj.h, section 4). */
-	return j * 4294967296.0 / (hz * hz * hz) >= 64.0 && (limit == 0.0 || j <= limit);
+	return j * 4294967296.0 / (hz * hz * hz) >= 64.0 && j <= VS_JERK_MAX &&
+	       (limit == 0.0 || j <= limit);
 }
 
 /* Names the field for a report: returns code. */

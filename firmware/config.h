@@ -142,6 +142,8 @@ void vs_config_defaults(vs_config_t *c);
 /* Checks ranges and consistency. Returns 0 when valid, otherwise a negative
  * number and writes the offending field's name to *field. */
 int vs_config_check(const vs_config_t *c, const char **field);
+/* The largest jerk a configuration or $jerk takes (mm/s^3, deg/s^3). */
+#define VS_JERK_MAX 1e7
 /* A jerk j (mm/s^3 or deg/s^3) the profiles can hold at c's tick rate
  * (0, unlimited, always), and within limit unless that is 0. */
 bool vs_jerk_fits(const vs_config_t *c, double j, double limit);

@@ -10,6 +10,7 @@
 
 #include <cmocka.h>
 
+#include "firmware/config.h"
 #include "firmware/motion.h"
 #include "firmware/traj.h"
 
@@ -428,6 +429,28 @@ static void test_omni_jog_vector_limits(void **state)
 	assert_int_equal(r.u1[1], ((q32_t)300 << 32) / 1000);
 }
 
+/* What $jerk and the configuration take: 0, or at least 64 raw units a
+ * tick^3 at the tick rate, at most VS_JERK_MAX and the limit; never a
+ * number that is not finite. */
+static void test_jerk_fits(void **state)
+{
+	(void)state;
+	vs_config_t c;
+	vs_config_defaults(&c);
+	assert_true(vs_jerk_fits(&c, 0.0, 0.0));
+	assert_true(vs_jerk_fits(&c, 2000.0, 0.0));
+	assert_true(vs_jerk_fits(&c, 2000.0, 2000.0));
+	assert_false(vs_jerk_fits(&c, 2000.5, 2000.0));
+	assert_true(vs_jerk_fits(&c, 1e7, 0.0));
+	assert_false(vs_jerk_fits(&c, 1e7 + 1, 0.0));
+	assert_false(vs_jerk_fits(&c, INFINITY, 0.0));
+	assert_false(vs_jerk_fits(&c, NAN, 0.0));
+	assert_false(vs_jerk_fits(&c, -1.0, 0.0));
+	/* 1 kHz: 64 raw units are 64 / 2^32 * 1e9 = 14.9 mm/s^3 */
+	assert_false(vs_jerk_fits(&c, 14.9, 0.0));
+	assert_true(vs_jerk_fits(&c, 14.91, 0.0));
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -443,6 +466,7 @@ int main(void)
 	    cmocka_unit_test(test_jerk_zero_is_unlimited),
 	    cmocka_unit_test(test_jog_s_curve),
 	    cmocka_unit_test(test_omni_jog_vector_limits),
+	    cmocka_unit_test(test_jerk_fits),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }
