@@ -80,10 +80,13 @@ static double seg_dist(pt_t p, pt_t a, pt_t b)
 static int first_move(const pt_t *p, int n)
 {
 	for (int i = 0; i < n; i++)
-		if (hypot(p[i].x, p[i].y) > 1e-6 || fabs(p[i].th) > 1e-6)
+		if (hypot(p[i].x, p[i].y) > 1e-8 || fabs(p[i].th) > 1e-8)
 			return i;
 	return 0;
 }
+
+/* Jerk for the jerk-limited runs (mm/s^3, deg/s^3; 0: none). */
+static double jerk_t, jerk_r;
 
 static void setup(void)
 {
@@ -99,7 +102,15 @@ static void setup(void)
 	motion_init(&eng, &p);
 	motion_set_velocity(&eng, q(500), q(90));
 	motion_set_accel(&eng, q(500), q(180));
-	ref_params_t rp = {.hz = HZ, .vt = 500, .vr = 90, .at = 500, .ar = 180, .blend_mm = 200};
+	motion_set_jerk(&eng, q(jerk_t), q(jerk_r));
+	ref_params_t rp = {.hz = HZ,
+			   .vt = 500,
+			   .vr = 90,
+			   .at = 500,
+			   .ar = 180,
+			   .jt = jerk_t,
+			   .jr = jerk_r,
+			   .blend_mm = 200};
 	ref_init(&ref, &rp, (ref_pose_t){0, 0, 0});
 }
 
@@ -202,5 +213,25 @@ int main(void)
 		    180 / M_PI;
 	run("cruise", "10-waypoint moveCruiseAbs route (tools/bench/rig.c)",
 	    (pt_t){route_mm[ROUTE_N - 1][0], route_mm[ROUTE_N - 1][1], hl});
+
+	/* The jerk-limited S-curve (traj.h, section 4) against the reference's
+	 * own search and counting. */
+	jerk_t = 2000;
+	jerk_r = 1000;
+	setup();
+	if (!motion_forward(&eng, q(10000)) || !ref_forward(&ref, 10000))
+		fail("forward");
+	run("line_jerk", "moveForward 10000 at 2000 mm/s^3", (pt_t){10000, 0, 0});
+
+	setup();
+	if (!motion_turn(&eng, q(360)) || !ref_turn(&ref, 360))
+		fail("turn");
+	run("turn_jerk", "moveTurn 360 at 1000 deg/s^3", (pt_t){0, 0, 0});
+
+	setup();
+	if (!motion_circular_rel(&eng, 0, q(1000), q(90)) || !ref_arc(&ref, 0, 1000, 90))
+		fail("arc");
+	run("arc_jerk", "moveCircularRel centre (0, 1000), 90 deg at 2000 mm/s^3, 1000 deg/s^3",
+	    (pt_t){1000, 1000, 90});
 	return 0;
 }

@@ -28,7 +28,9 @@ long bench_scenario(rig_t *r, const char *sc, const bench_hooks_t *h)
 	if (strcmp(sc, "idle") == 0) {
 		for (int i = 0; i < 2000; i++)
 			tick(r, h, "tick");
-	} else if (strcmp(sc, "line") == 0) {
+	} else if (strcmp(sc, "line") == 0 || strcmp(sc, "line_jerk") == 0) {
+		if (sc[4])
+			need(vehicle_set_jerk(&r->v, 2000.0, 1000.0), "$jerk");
 		need(vs_moveForward(&r->v, 2000.0), "moveForward");
 		do
 			tick(r, h, "tick");
@@ -40,7 +42,9 @@ long bench_scenario(rig_t *r, const char *sc, const bench_hooks_t *h)
 		do
 			tick(r, h, "tick");
 		while (motion_has_work(&r->v.motion));
-	} else if (strcmp(sc, "jog") == 0) {
+	} else if (strcmp(sc, "jog") == 0 || strcmp(sc, "jog_jerk") == 0) {
+		if (sc[3])
+			need(vehicle_set_jerk(&r->v, 2000.0, 1000.0), "$jerk");
 		for (int i = 0; i < 3000; i++) {
 			if (i % 100 == 0)
 				need(vs_moveJog(&r->v, 300.0, 0.0, 30.0), "moveJog");

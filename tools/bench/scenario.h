@@ -8,6 +8,7 @@
  *   cruise    the 10-waypoint moveCruiseAbs route (rig.c): every tick until idle
  *   jog       moveJog 300 mm/s, 30 deg/s, re-sent every 100 ms: 3000 ticks
  *   retarget  moveContinuousRel while moving, 20 times: the call and the tick after it
+ *   line_jerk, jog_jerk   line and jog with $jerk 2000 1000 (mm/s^3, deg/s^3)
  */
 #ifndef BENCH_SCENARIO_H
 #define BENCH_SCENARIO_H
@@ -22,7 +23,7 @@ typedef struct {
 	bool (*retarget)(rig_t *r, vs_position_t p, const char *label);
 } bench_hooks_t;
 
-#define BENCH_SCENARIOS "idle line cruise jog retarget"
+#define BENCH_SCENARIOS "idle line cruise jog retarget line_jerk jog_jerk"
 
 /* Runs one scenario on a rig fresh from rig_init. Returns the measured
  * ticks, or -1 for an unknown name; exits when an operation is refused. */

@@ -125,6 +125,14 @@ static double ar_pt(const ref_t *r)
 {
 	return r->p.ar / (r->p.hz * r->p.hz);
 }
+static double jt_pt(const ref_t *r)
+{
+	return r->p.jt / (r->p.hz * r->p.hz * r->p.hz);
+}
+static double jr_pt(const ref_t *r)
+{
+	return r->p.jr / (r->p.hz * r->p.hz * r->p.hz);
+}
 
 /* Pose where the queued motion ends. */
 static ref_pose_t tail(const ref_t *r)
@@ -155,6 +163,7 @@ static bool line_to(ref_t *r, double x, double y, double stop_short)
 	c->uy = l > 0 ? dy / l : 0;
 	c->vmax = vt_pt(r);
 	c->a = at_pt(r);
+	c->j = jt_pt(r);
 	c->p1 = c->p0;
 	c->p1.x = c->p0.x + c->len * c->ux;
 	c->p1.y = c->p0.y + c->len * c->uy;
@@ -176,6 +185,7 @@ bool ref_turn(ref_t *r, double angle_deg)
 	c->len = fabs(angle_deg);
 	c->vmax = vr_pt(r);
 	c->a = ar_pt(r);
+	c->j = jr_pt(r);
 	c->p1 = c->p0;
 	c->p1.th += angle_deg;
 	return true;
@@ -203,6 +213,7 @@ bool ref_arc(ref_t *r, double cx_mm, double cy_mm, double angle_deg)
 	double mm_per_deg = hypot(cx_mm, cy_mm) * DEG;
 	c->vmax = fmin(vr_pt(r), vt_pt(r) / mm_per_deg);
 	c->a = fmin(ar_pt(r), at_pt(r) / mm_per_deg);
+	c->j = r->p.jt > 0 && r->p.jr > 0 ? fmin(jr_pt(r), jt_pt(r) / mm_per_deg) : 0;
 	arc_pose(c, c->len, &c->p1);
 	return true;
 }
@@ -298,6 +309,57 @@ bool ref_cruise(ref_t *r, const double (*wp)[2], int n)
 	return true;
 }
 
+/* ---- jerk-limited pieces (traj.h, section 4, derived again) ---------- */
+
+/* The raw unit of the firmware's per-tick limits: its plan keeps 1, 2 and
+ * 4 of them below speed, acceleration and jerk for rounding. */
+#define RAW (1.0 / 4294967296.0)
+
+/* The shortest whole-tick triple (Nv, Na, Nj), Na >= Nj, Nv >= Na + Nj,
+ * with len / Nv <= v, len / (Nv Na) <= a, len / (Nv Na Nj) <= j: every Nj
+ * and Na up to the continuous phases and a few beyond. */
+static void sc_plan(ref_piece_t *c)
+{
+	/* The firmware holds its per-tick limits in whole raw units, rounded
+	 * down. */
+	double v = (floor(c->vmax / RAW) - 1) * RAW, a = (floor(c->a / RAW) - 2) * RAW;
+	double j = (floor(c->j / RAW) - 4) * RAW, d = c->len;
+	long best = -1;
+	long nj_hi = (long)ceil(a / j) + 2, na_hi = (long)ceil(v / a) + 2;
+	for (long nj = 1; nj <= nj_hi; nj++) {
+		for (long na = nj; na <= na_hi + nj && na + nj < REF_TRI_MAX; na++) {
+			double nv = fmax(fmax(ceil(d / v), ceil(d / (a * na))),
+					 fmax(ceil(d / (j * na * nj)), (double)(na + nj)));
+			long t = (long)nv + na + nj;
+			if (best < 0 || t < best) {
+				best = t;
+				c->nv = (long)nv;
+				c->na = na;
+				c->nj = nj;
+			}
+		}
+	}
+	/* The Na and Nj boxes convolved: a trapezoid of counts, summed. */
+	double sum = 0;
+	for (long m = 0; m < c->na + c->nj - 1; m++) {
+		long lo = m - c->nj + 1 > 0 ? m - c->nj + 1 : 0;
+		long hi = m < c->na - 1 ? m : c->na - 1;
+		sum += (double)(hi - lo + 1);
+		c->tri_cum[m] = sum;
+	}
+}
+
+/* Counts of the three boxes convolved, up to step k: the speed count is
+ * the trapezoid's cumulative count less the same Nv steps later. */
+static double sc_count(const ref_piece_t *c, long k)
+{
+	long last = c->na + c->nj - 2;
+	double a = k < 0 ? 0 : c->tri_cum[k > last ? last : k];
+	long k2 = k - c->nv;
+	double b = k2 < 0 ? 0 : c->tri_cum[k2 > last ? last : k2];
+	return a - b;
+}
+
 /* ---- execution -------------------------------------------------------- */
 
 static double horizon(const ref_piece_t *c, double rem)
@@ -342,11 +404,41 @@ static void advance(ref_t *r, const ref_piece_t *c, double s0, double s1)
 	}
 }
 
+/* One tick of a jerk-limited piece: the position is len S_k / P. */
+static void sc_step(ref_t *r, ref_piece_t *c)
+{
+	if (r->k == 0)
+		sc_plan(c);
+	double p = (double)c->nv * (double)c->na * (double)c->nj;
+	r->s_count += sc_count(c, r->k);
+	r->k++;
+	double s = c->len * r->s_count / p;
+	if (r->k >= c->nv + c->na + c->nj - 2) {
+		r->pose = c->p1;
+		r->s = 0;
+		r->s_count = 0;
+		r->k = 0;
+		r->cur++;
+		r->settle = true;
+		return;
+	}
+	advance(r, c, r->s, s);
+	r->s = s;
+}
+
 bool ref_step(ref_t *r)
 {
 	if (r->cur >= r->n)
 		return false;
 	ref_piece_t *c = &r->pc[r->cur];
+	if (c->j > 0 && !c->blend && r->v == 0) {
+		if (r->settle && r->k == 0) {
+			r->settle = false; /* a tick at rest between two pieces */
+			return true;
+		}
+		sc_step(r, c);
+		return true;
+	}
 	r->v = step(r->v, horizon(c, c->len - r->s), c->vmax, c->a);
 	double budget = r->v;
 	for (;;) {
