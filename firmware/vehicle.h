@@ -169,7 +169,7 @@ struct vehicle {
 	fx_trig_cache_t odom_trig; /* odometry's last heading */
 	uint8_t naxes;
 	/* Settings in force (interface units, as accepted). */
-	vs_velocity_t vel_set, acc_set, jerk_set;
+	vs_velocity_t vel_set, acc_set;
 	int16_t jog_timeout_ms;
 	/* Unit state. */
 	bool powered, servo, locked, stuck, sensor_lock, joystick_on;

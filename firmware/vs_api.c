@@ -175,7 +175,6 @@ int vehicle_init(vehicle_t *v, const vs_config_t *cfg, const vs_hal_t *hal, cons
 	double counts_per_mm = init_kin(v, cfg, init_motion(v, cfg));
 	v->vel_set = (vs_velocity_t){cfg->vel_default_t_mm_s, cfg->vel_default_r_deg_s};
 	v->acc_set = (vs_velocity_t){cfg->acc_default_t_mm_s2, cfg->acc_default_r_deg_s2};
-	v->jerk_set = (vs_velocity_t){cfg->jerk_default_t_mm_s3, cfg->jerk_default_r_deg_s3};
 	v->jog_timeout_ms = (int16_t)cfg->jog_timeout_default_ms;
 	init_supervision(v, cfg, counts_per_mm);
 
@@ -408,8 +407,8 @@ bool vs_moveJog(vehicle_t *v, double xVel, double yVel, double thetaVel)
 
 void vehicle_jerk(const vehicle_t *v, double *jt, double *jr)
 {
-	*jt = v->jerk_set.translation;
-	*jr = v->jerk_set.rotation;
+	*jt = v->cfg.jerk_default_t_mm_s3;
+	*jr = v->cfg.jerk_default_r_deg_s3;
 }
 
 bool vehicle_set_jerk(vehicle_t *v, double jt, double jr)
@@ -417,7 +416,9 @@ bool vehicle_set_jerk(vehicle_t *v, double jt, double jr)
 	if (!vs_jerk_fits(&v->cfg, jt, v->cfg.jerk_limit_t_mm_s3) ||
 	    !vs_jerk_fits(&v->cfg, jr, v->cfg.jerk_limit_r_deg_s3))
 		return false;
-	v->jerk_set = (vs_velocity_t){jt, jr};
+	/* The running configuration holds it, as $config shows. */
+	v->cfg.jerk_default_t_mm_s3 = jt;
+	v->cfg.jerk_default_r_deg_s3 = jr;
 	motion_set_jerk(&v->motion, to_q32(jt), to_q32(jr));
 	return true;
 }

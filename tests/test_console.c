@@ -770,6 +770,7 @@ static void test_config(void **state)
 	EXPECT("$jerk 1e8 0", "error 8 $jerk: 1e8 0 exceeds the limits or is below what the tick "
 			      "rate holds");
 	EXPECT("$jerk", "ok jerk 2000.000 1000.000 limit 0.000 0.000");
+	EXPECT("$config jerk_default_r_deg_s3", "ok jerk_default_r_deg_s3 1000.000");
 	EXPECT("$jerk 0 0", "ok jerk 0.000 0.000 limit 0.000 0.000");
 	EXPECT("$watchdog 250", "ok watchdog 250");
 	EXPECT("$config link_timeout_ms", "ok link_timeout_ms 250");
