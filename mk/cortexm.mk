@@ -58,11 +58,16 @@ MCU_CFLAGS_firmware := $(MCU_BASE) $(STRICT) -ffreestanding
 MCU_CFLAGS_proto := $(MCU_BASE) $(STRICT) $(HOST_DEFS) -DVS_NO_HELP_TEXT -DVS_NO_CONFIG_EXTRA
 MCU_CFLAGS_hal := $(MCU_BASE) -ffreestanding
 mcu_objs = $(patsubst %.c,$(MCU)/obj/%.o,$(1))
+# The board's memcpy, memset and the like are plain objects: calls to them
+# that code generation makes after link-time optimisation must find them.
+MCU_NO_LTO := $(MCU)/obj/hal/cortexm/small_libc.o
+$(MCU_NO_LTO): MCU_OBJ_FLAGS := -fno-lto
 
 $(MCU)/obj/%.o: %.c
 	@mkdir -p $(dir $@)
 	@$(if $(Q),echo "  CC      $@")
-	$(Q)$(ARM_CC) $(MCU_CFLAGS_$(firstword $(subst /, ,$<))) $(EXTRA_CFLAGS) -c $< -o $@
+	$(Q)$(ARM_CC) $(MCU_CFLAGS_$(firstword $(subst /, ,$<))) $(MCU_OBJ_FLAGS) $(EXTRA_CFLAGS) \
+		-c $< -o $@
 
 $(MCU)/libfirmware.a: $(call mcu_objs,$(FW_SRC))
 $(MCU)/libproto.a: $(call mcu_objs,$(MCU_PROTO_SRC))

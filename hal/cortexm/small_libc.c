@@ -33,3 +33,46 @@ size_t strlen(const char *s)
 		p++;
 	return (size_t)(p - s);
 }
+
+/* memcpy, memmove and memset: a word at a time when both ends are aligned
+ * (the firmware's structs are), else a byte at a time. newlib's unrolled
+ * ones cost 720 bytes of flash, these about 200. The attribute keeps the
+ * compiler from turning the loops back into calls to themselves. */
+#define NO_LOOP_CALLS __attribute__((optimize("no-tree-loop-distribute-patterns")))
+
+NO_LOOP_CALLS void *memcpy(void *restrict dst, const void *restrict src, size_t n)
+{
+	unsigned char *d = dst;
+	const unsigned char *s = src;
+	if ((((uintptr_t)d | (uintptr_t)s) & 3u) == 0) {
+		for (; n >= 4; n -= 4, d += 4, s += 4)
+			*(uint32_t *)(void *)d = *(const uint32_t *)(const void *)s;
+	}
+	while (n--)
+		*d++ = *s++;
+	return dst;
+}
+
+NO_LOOP_CALLS void *memmove(void *dst, const void *src, size_t n)
+{
+	unsigned char *d = dst;
+	const unsigned char *s = src;
+	if (d <= s || d >= s + n)
+		return memcpy(dst, src, n); /* forward copying is safe */
+	while (n--)
+		d[n] = s[n];
+	return dst;
+}
+
+NO_LOOP_CALLS void *memset(void *dst, int c, size_t n)
+{
+	unsigned char *d = dst;
+	if (((uintptr_t)d & 3u) == 0) {
+		uint32_t w = (unsigned char)c * 0x01010101u;
+		for (; n >= 4; n -= 4, d += 4)
+			*(uint32_t *)(void *)d = w;
+	}
+	while (n--)
+		*d++ = (unsigned char)c;
+	return dst;
+}
