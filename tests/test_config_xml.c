@@ -172,6 +172,22 @@ static void jerk_attributes(void **state)
 	assert_true(got.jerk_default_r_deg_s3 == 1000.0);
 }
 
+/* The shipped jerk example: the reference base with jerk limits. */
+static void shipped_jerk(void **state)
+{
+	(void)state;
+	vs_config_t got, def;
+	char err[256];
+	assert_int_equal(
+	    config_load("config/vehicle-jerk.xml", "config/io.xml", &got, NULL, err, sizeof(err)), 0);
+	vs_config_defaults(&def);
+	assert_true(got.jerk_limit_t_mm_s3 == 5000.0 && got.jerk_limit_r_deg_s3 == 3000.0);
+	assert_true(got.jerk_default_t_mm_s3 == 2000.0 && got.jerk_default_r_deg_s3 == 1000.0);
+	got.jerk_limit_t_mm_s3 = got.jerk_limit_r_deg_s3 = 0.0;
+	got.jerk_default_t_mm_s3 = got.jerk_default_r_deg_s3 = 0.0;
+	assert_same_settings(&got, &def);
+}
+
 /* Loads a vehicle file (with the shipped io.xml) or an io file (with the
  * shipped vehicle.xml) and expects exactly this error. */
 static void expect_error(const char *vehicle, const char *io, const char *want)
@@ -525,6 +541,7 @@ int main(void)
 	    cmocka_unit_test(shipped_omni),
 	    cmocka_unit_test(omitted_attributes_keep_defaults),
 	    cmocka_unit_test(jerk_attributes),
+	    cmocka_unit_test(shipped_jerk),
 	    cmocka_unit_test(error_missing_file),
 	    cmocka_unit_test(error_malformed),
 	    cmocka_unit_test(error_unknown_element),

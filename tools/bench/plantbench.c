@@ -3,7 +3,8 @@
  * motor lag and limits, and on the ideal plant beside it, for the
  * differential and the mecanum configuration. Run from the top folder.
  *   plantbench [VEHICLE.xml ...]   (default: config/vehicle.xml
- *                                   config/vehicle-omni.xml)
+ *                                   config/vehicle-omni.xml
+ *                                   config/vehicle-jerk.xml)
  */
 #include <math.h>
 #include <stdio.h>
@@ -81,13 +82,14 @@ static int run_config(const char *path)
 
 int main(int argc, char **argv)
 {
-	static const char *const defaults[] = {"config/vehicle.xml", "config/vehicle-omni.xml"};
+	static const char *const defaults[] = {"config/vehicle.xml", "config/vehicle-omni.xml",
+					       "config/vehicle-jerk.xml"};
 	int rc = 0;
 	if (argc > 1) {
 		for (int i = 1; i < argc; i++)
 			rc |= run_config(argv[i]);
 	} else {
-		for (size_t i = 0; i < 2; i++)
+		for (size_t i = 0; i < sizeof defaults / sizeof defaults[0]; i++)
 			rc |= run_config(defaults[i]);
 	}
 	return rc;
