@@ -112,7 +112,6 @@ typedef struct {
 	q32_t amax_t_pt2, amax_r_pt2, vmax_t_pt, vmax_r_pt;
 	q32_t j_t_pt3, j_r_pt3, jmax_t_pt3, jmax_r_pt3; /* jerks, 0 = unlimited */
 	q32_t cap_t_pt;					/* caution cap, 0 = none */
-	uint32_t jog_timeout_ticks;
 
 	fx_pose_t ref;	/* reference (commanded) pose */
 	fx_twist_t vel; /* current commanded body velocity */
@@ -140,20 +139,20 @@ typedef struct {
 	q32_t lim_cruise; /* lim_vmax plus its braking distance (-1: not yet) */
 	int64_t lim_n;	  /* the profile's last braking step count (traj_step_near) */
 	q32_t lim_j;	  /* the piece's jerk limit, 0 = unlimited */
-	/* Jerk-limited pieces (motion_path.c, sc_speed): the planned profile,
-	 * whether it runs, and the last tick's change of speed. */
+	/* Jerk-limited pieces (motion_path.c, sc_speed): the planned profile
+	 * (sc_on below: it runs) and the last tick's change of speed. */
 	traj_sc_t sc;
-	bool sc_on;
 	q32_t acc;
 
 	/* Jog / joystick velocity target (body frame, per tick), and the last
 	 * tick's change of velocity (the jerk-limited slew's state). */
 	fx_twist_t vtarget, vacc;
-	uint32_t jog_age_ticks;
+	uint32_t jog_timeout_ticks, jog_age_ticks;
 	/* Continuous mode goal (world frame). */
 	fx_pose_t goal;
 	bool goal_position_done;
 	bool goal_reverse; /* differential base: backing toward the goal */
+	bool sc_on;	   /* the planned jerk-limited profile runs */
 } motion_t;
 
 void motion_init(motion_t *m, const motion_params_t *p);

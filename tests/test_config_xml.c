@@ -179,7 +179,8 @@ static void shipped_jerk(void **state)
 	vs_config_t got, def;
 	char err[256];
 	assert_int_equal(
-	    config_load("config/vehicle-jerk.xml", "config/io.xml", &got, NULL, err, sizeof(err)), 0);
+	    config_load("config/vehicle-jerk.xml", "config/io.xml", &got, NULL, err, sizeof(err)),
+	    0);
 	vs_config_defaults(&def);
 	assert_true(got.jerk_limit_t_mm_s3 == 5000.0 && got.jerk_limit_r_deg_s3 == 3000.0);
 	assert_true(got.jerk_default_t_mm_s3 == 2000.0 && got.jerk_default_r_deg_s3 == 1000.0);
