@@ -344,6 +344,39 @@ static void test_stop_then_move_starts_clean(void **state)
 	assert_true(r.jmax[0] <= r.m.j_t_pt3);
 }
 
+/* No stale state after a halt (servo off, estop, a fault: motion_halt) in
+ * the middle of a jerk-limited move or jog: the next motion starts from
+ * rest with zero acceleration, its first step at most one jerk. */
+static void test_halt_then_move_starts_clean(void **state)
+{
+	(void)state;
+	jrig_t r;
+	jrig_init(&r, MOTION_KIN_DIFF);
+	assert_true(motion_forward(&r.m, (q32_t)1000 << 32));
+	for (int i = 0; i < 600; i++)
+		jrig_tick(&r);
+	motion_halt(&r.m);
+	assert_true(r.m.acc == 0 && !r.m.sc_on);
+	jrig_tick(&r); /* the drives stop at once: an acceleration step is allowed */
+	jrig_tick(&r);
+	assert_true(motion_jog(&r.m, (q32_t)300 << 32, 0, (q32_t)30 << 32));
+	jrig_tick(&r);
+	assert_true(r.u1[0] > 0 && r.u1[0] <= r.m.j_t_pt3);
+	assert_true(r.u1[2] > 0 && r.u1[2] <= r.m.j_r_pt3);
+	motion_halt(&r.m);
+	assert_true(r.m.vacc.vx_pt == 0 && r.m.vacc.w_pt == 0);
+	jrig_tick(&r);
+	jrig_tick(&r);
+	q32_t x0 = r.m.ref.x_mm;
+	assert_true(motion_forward(&r.m, (q32_t)100 << 32));
+	jrig_tick(&r);
+	assert_true(r.u1[0] > 0 && r.u1[0] <= r.m.j_t_pt3);
+	jrig_reset_peaks(&r);
+	jrig_run(&r, 10000);
+	assert_true(r.jmax[0] <= r.m.j_t_pt3);
+	assert_int_equal(r.m.ref.x_mm - x0, (q32_t)100 << 32);
+}
+
 /* A speed cap lowered under a planned move (the caution input) is never
  * exceeded for long: the unit brakes to rest at the limits, plans the rest
  * at the cap, and lands. */
@@ -429,6 +462,59 @@ static void test_omni_jog_vector_limits(void **state)
 	assert_int_equal(r.u1[1], ((q32_t)300 << 32) / 1000);
 }
 
+/* A new speed while moving with non-zero acceleration steps nothing: a
+ * lower setVelocity in the middle of the acceleration phase brakes at the
+ * limits from the acceleration the unit has (then plans the rest at the new
+ * speed and lands); a higher one keeps the planned profile. Every tick of
+ * both is within the acceleration and jerk that apply. */
+static void test_new_speed_while_accelerating(void **state)
+{
+	(void)state;
+	for (int raise = 0; raise < 2; raise++) {
+		jrig_t r;
+		jrig_init(&r, MOTION_KIN_DIFF);
+		assert_true(motion_forward(&r.m, (q32_t)1000 << 32));
+		for (int i = 0; i < 400; i++) /* accelerating at 500 mm/s^2 */
+			jrig_tick(&r);
+		/* On the plateau: d / (Nv Na) to the rounding. */
+		q32_t plateau = ((q32_t)1000 << 32) / (r.m.sc.nv * r.m.sc.na);
+		assert_true(llabs(r.a1[0] - plateau) <= 2);
+		q32_t a_before = r.a1[0];
+		motion_set_velocity(&r.m, (q32_t)(raise ? 800 : 200) << 32, (q32_t)90 << 32);
+		jrig_reset_peaks(&r);
+		jrig_tick(&r);
+		/* The tick after: the acceleration moved by at most a jerk. */
+		assert_true(llabs(r.a1[0] - a_before) <= r.m.jmax_t_pt3);
+		jrig_run(&r, 20000);
+		assert_int_equal(r.m.ref.x_mm, (q32_t)1000 << 32);
+		assert_true(r.amax[0] <= r.m.amax_t_pt2);
+		assert_true(r.jmax[0] <= r.m.jmax_t_pt3);
+		if (raise) /* the planned profile ran on: within the set values */
+			assert_true(r.amax[0] <= r.m.a_t_pt2 && r.jmax[0] <= r.m.j_t_pt3);
+	}
+}
+
+/* A new jog velocity while accelerating (a retarget of the jog): the
+ * acceleration turns round at the jerk, never in a step. */
+static void test_jog_retarget_while_accelerating(void **state)
+{
+	(void)state;
+	jrig_t r;
+	jrig_init(&r, MOTION_KIN_DIFF);
+	motion_set_jog_timeout_ms(&r.m, 5000);
+	assert_true(motion_jog(&r.m, (q32_t)400 << 32, 0, 0));
+	for (int i = 0; i < 300; i++)
+		jrig_tick(&r);
+	assert_true(r.a1[0] > r.m.a_t_pt2 / 2);
+	assert_true(motion_jog(&r.m, -((q32_t)200 << 32), 0, 0));
+	jrig_reset_peaks(&r);
+	for (int i = 0; i < 3000; i++)
+		jrig_tick(&r);
+	assert_int_equal(r.u1[0], (-((q32_t)200 << 32)) / 1000);
+	assert_true(r.amax[0] <= r.m.a_t_pt2);
+	assert_true(r.jmax[0] <= r.m.j_t_pt3);
+}
+
 /* What $jerk and the configuration take: 0, or at least 64 raw units a
  * tick^3 at the tick rate, at most VS_JERK_MAX and the limit; never a
  * number that is not finite. */
@@ -463,10 +549,13 @@ int main(void)
 	    cmocka_unit_test(test_pause_resume_s_curve),
 	    cmocka_unit_test(test_stop_then_move_starts_clean),
 	    cmocka_unit_test(test_caution_cap_mid_move),
+	    cmocka_unit_test(test_halt_then_move_starts_clean),
 	    cmocka_unit_test(test_jerk_zero_is_unlimited),
 	    cmocka_unit_test(test_jog_s_curve),
 	    cmocka_unit_test(test_omni_jog_vector_limits),
 	    cmocka_unit_test(test_jerk_fits),
+	    cmocka_unit_test(test_new_speed_while_accelerating),
+	    cmocka_unit_test(test_jog_retarget_while_accelerating),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }
