@@ -10,6 +10,10 @@
  * 32-bit core. */
 static __attribute__((noinline)) int64_t mul_sat(int64_t x, int64_t y)
 {
+	/* Both below 2^31: the product fits, no division (a library call of
+	 * some 100 instructions on a 32-bit core). */
+	if (((uint64_t)x | (uint64_t)y) >> 31 == 0)
+		return x * y;
 	return x > INT64_MAX / y ? INT64_MAX : x * y;
 }
 
@@ -66,9 +70,9 @@ bool traj_sc_plan(traj_sc_t *p, q32_t d, q32_t v, q32_t a, q32_t j)
 		return false;
 	int64_t nv_v = ceil_div(d, p->vm), tj, ta, best = INT64_MAX;
 	sc_guess(p, d, &tj, &ta);
-	for (int64_t nj = fx_max64(tj - 1, 1); nj <= tj + 1; nj++) {
-		const int64_t nas[4] = {nj, ta - 1, ta, ta + 1};
-		for (int i = 0; i < 4; i++) {
+	for (int64_t nj = tj; nj <= tj + 1; nj++) {
+		const int64_t nas[3] = {nj, ta, ta + 1};
+		for (int i = 0; i < 3; i++) {
 			int64_t na = nas[i];
 			if (na < nj)
 				continue;

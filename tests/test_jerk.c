@@ -113,7 +113,7 @@ static void test_sc_random_against_brute_force(void **state)
 {
 	(void)state;
 	srand(7);
-	for (int i = 0; i < 150; i++) {
+	for (int i = 0; i < 500; i++) {
 		double hz = 250; /* phases of tens of ticks: the search is short */
 		double vv = 20 + rand() % 480, aa = 500 + rand() % 2000, jj = 5000 + rand() % 20000;
 		double dd = 0.01 + (rand() % 30000) / 1000.0;
