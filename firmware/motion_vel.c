@@ -113,6 +113,14 @@ static void slew_rates(const motion_t *m, bool braking, q32_t *at, q32_t *ar)
  * exceeds them. */
 #define INV_SQRT2_Q30 ((int32_t)759250124)
 
+/* x / sqrt(2) rounded down, for x >= 0 of any size (split in two so that
+ * no product passes 2^62). */
+static q32_t share(q32_t x)
+{
+	const int64_t k = INV_SQRT2_Q30, lo = x & ((1 << 30) - 1);
+	return (x >> 30) * k + ((lo * k) >> 30);
+}
+
 /* Jerk-limited slew of the velocity modes (traj.h, section 5), per axis:
  * the jerks (set ones, or the limits braking) for translation and rotation,
  * 0 for an axis without one (the acceleration-limited slew). */
@@ -121,9 +129,8 @@ static void jerk_slew(motion_t *m, const fx_twist_t *tgt, q32_t at, q32_t ar, bo
 	q32_t jt = braking ? m->jmax_t_pt3 : m->j_t_pt3;
 	q32_t jr = braking ? m->jmax_r_pt3 : m->j_r_pt3;
 	if (jt > 0 && m->p.kin == MOTION_KIN_OMNI) {
-		/* Rounded down (per-tick values are far below 2^33). */
-		at = (at * INV_SQRT2_Q30) >> 30;
-		jt = (jt * INV_SQRT2_Q30) >> 30;
+		at = share(at);
+		jt = share(jt);
 		traj_jslew(&m->vel.vy_pt, &m->vacc.vy_pt, tgt->vy_pt, at, jt);
 	}
 	if (jt > 0)
