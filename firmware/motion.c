@@ -12,6 +12,7 @@ static void per_tick(motion_t *m)
 	m->amax_r_pt2 = m->p.acc_limit_r / hz / hz;
 	m->jmax_t_pt3 = m->p.jerk_limit_t / hz / hz / hz;
 	m->jmax_r_pt3 = m->p.jerk_limit_r / hz / hz / hz;
+	m->jerk_any = (m->jmax_t_pt3 | m->jmax_r_pt3) != 0;
 }
 
 void motion_init(motion_t *m, const motion_params_t *p)
@@ -57,6 +58,7 @@ void motion_set_jerk(motion_t *m, q32_t jt, q32_t jr)
 	int64_t hz = m->p.tick_hz;
 	m->j_t_pt3 = jt / hz / hz / hz;
 	m->j_r_pt3 = jr / hz / hz / hz;
+	m->jerk_any = (m->j_t_pt3 | m->j_r_pt3 | m->jmax_t_pt3 | m->jmax_r_pt3) != 0;
 	limits_changed(m);
 }
 

@@ -120,12 +120,13 @@ typedef struct {
 	bool stopping;	/* stop(): decelerating, then discard */
 	bool joystick;	/* joystick enabled */
 	bool lim_ok;	/* lim_* below hold for the active piece */
-	bool settle;	/* a motion ended at rest last tick (motion_tick) */
+	bool jerk_any;	/* a jerk is set or limited (j*_pt3 below) */
 
 	motion_cmd_t q[MOTION_QUEUE_LEN];
 	uint8_t q_head, q_count;
 	uint8_t stop_drop;   /* commands stop() discards once at rest (the first) */
-	bool rest_tick;	     /* a piece stopped: the next tick stands still */
+	bool rest_tick;	     /* a piece or (jerk limits) a motion stopped: the next
+				tick stands still */
 	q32_t pass_vt;	     /* the line speed the corner speeds were planned for */
 	uint8_t plan_budget; /* commands a pass walks per call (0: all) */
 	uint8_t pass_todo;   /* the queue's first pass_todo commands await the pass */

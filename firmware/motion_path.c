@@ -596,6 +596,19 @@ static inline __attribute__((always_inline)) bool piece_finish(motion_t *m)
 	return true;
 }
 
+/* A piece was set up: from its start, with its limits to compute. From
+ * rest to rest it runs on the jerk-limited profile, its limit fixed for
+ * the piece. */
+static inline __attribute__((always_inline)) void piece_begin(motion_t *m)
+{
+	m->seg.s = 0;
+	m->sc_on = false;
+	m->lim_j = m->v == 0 && !blends_onward(m, m->seg.kind)
+		       ? piece_jerk(&m->seg, m->j_t_pt3, m->j_r_pt3)
+		       : 0;
+	limits_changed(m);
+}
+
 static void path_tick(motion_t *m, fx_twist_t *out)
 {
 	bool braking = m->paused || m->stopping;
@@ -629,14 +642,7 @@ static void path_tick(motion_t *m, fx_twist_t *out)
 				pop(m);
 				continue;
 			}
-			m->seg.s = 0;
-			m->sc_on = false;
-			/* From rest to rest, a piece runs on the jerk-limited
-			 * profile; its limit is fixed for the piece. */
-			m->lim_j = m->v == 0 && !blends_onward(m, m->seg.kind)
-				       ? piece_jerk(&m->seg, m->j_t_pt3, m->j_r_pt3)
-				       : 0;
-			limits_changed(m);
+			piece_begin(m);
 			if (m->rest_tick) {
 				/* A stop is a tick at zero before the next piece: the
 				 * stopping piece's last step was its remainder (up to
@@ -685,15 +691,6 @@ void motion_tick(motion_t *m, const fx_pose_t *measured, fx_twist_t *out)
 {
 	*out = (fx_twist_t){0};
 	uint8_t mode_before = m->mode;
-	if (m->settle) {
-		/* A motion ended at rest last tick, its last change of speed
-		 * up to the braking jerk: one tick at rest before the next. */
-		m->settle = false;
-		if (m->mode != MODE_IDLE) {
-			m->vel = (fx_twist_t){0};
-			return;
-		}
-	}
 	switch (m->mode) {
 	case MODE_PATH:
 		path_tick(m, out);
@@ -709,19 +706,26 @@ void motion_tick(motion_t *m, const fx_pose_t *measured, fx_twist_t *out)
 		break;
 	default:
 		m->stopping = false;
+		m->rest_tick = false; /* this tick is the one at rest */
 		m->vel = (fx_twist_t){0};
 		/* Idle: follow the measured pose so relative moves start from it. */
 		if (measured)
 			m->ref = *measured;
 		break;
 	}
-	/* Without jerk limits a stop's last step is a change of speed like
-	 * any other: no settling tick (today's profiles, bit for bit). */
-	m->settle = mode_before != MODE_IDLE && m->mode == MODE_IDLE &&
-		    (m->j_t_pt3 | m->j_r_pt3 | m->jmax_t_pt3 | m->jmax_r_pt3) != 0;
-	/* A velocity mode that ended hands over to queued path commands. */
-	if (m->mode == MODE_IDLE && m->q_count > 0)
-		m->mode = MODE_PATH;
-	if (m->mode == MODE_IDLE && m->joystick)
-		m->mode = MODE_JOYSTICK;
+	if (m->mode == MODE_IDLE) {
+		/* A motion that ended at rest under jerk limits leaves its last
+		 * change of speed (up to the braking jerk) to settle: a tick at
+		 * rest before the next (each mode's tick honours rest_tick).
+		 * Without jerk limits a stop's last step is a change of speed
+		 * like any other (today's profiles, bit for bit). */
+		if (mode_before != MODE_IDLE && m->jerk_any)
+			m->rest_tick = true;
+		/* A velocity mode that ended hands over to queued path
+		 * commands. */
+		if (m->q_count > 0)
+			m->mode = MODE_PATH;
+		else if (m->joystick)
+			m->mode = MODE_JOYSTICK;
+	}
 }

@@ -144,8 +144,21 @@ static void jerk_slew(motion_t *m, const fx_twist_t *tgt, q32_t at, q32_t ar, bo
 }
 
 /* Jog and joystick: slew toward the target velocity. */
+/* The tick at rest after a motion that ended under jerk limits
+ * (motion_tick): true when this tick is it. */
+static bool rest_first(motion_t *m, fx_twist_t *out)
+{
+	if (!m->rest_tick)
+		return false;
+	m->rest_tick = false;
+	*out = (fx_twist_t){0};
+	return true;
+}
+
 void motion_velocity_tick(motion_t *m, fx_twist_t *out)
 {
+	if (rest_first(m, out))
+		return;
 	bool braking = m->stopping || m->paused;
 	fx_twist_t tgt = m->vtarget;
 	q32_t at, ar;
@@ -255,6 +268,8 @@ static void goal_arrive(motion_t *m, q32_t at, q32_t ar)
 /* Continuous mode: drive toward the goal with slewed velocities. */
 void motion_continuous_tick(motion_t *m, fx_twist_t *out)
 {
+	if (rest_first(m, out))
+		return;
 	bool braking = m->stopping || m->paused;
 	fx_twist_t want = {0};
 	q32_t dx = m->goal.x_mm - m->ref.x_mm, dy = m->goal.y_mm - m->ref.y_mm;
