@@ -593,6 +593,13 @@ static inline __attribute__((always_inline)) bool piece_finish(motion_t *m)
 		corner_piece(m, q_at(m, 0));
 		limits_changed(m);
 	}
+	/* A line planned from rest to rest that a waypoint queued since
+	 * turned into a blend has landed (at the speed of its last step, up
+	 * to a jerk): what follows runs on the acceleration-limited profile. */
+	if (m->lim_j) {
+		m->lim_j = 0;
+		m->sc_on = false;
+	}
 	return true;
 }
 

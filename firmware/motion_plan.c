@@ -209,6 +209,8 @@ bool motion_plan_corner(motion_t *m, uint8_t i)
 	t = fx_min64(t, lout / 2);
 	q32_t rem = 0;
 	bool executing = (i == 0) && head_line_remaining(m, &rem);
+	if (executing && m->lim_j > 0)
+		return false; /* planned from rest to rest (jerk limits): it stops there */
 	if (executing)
 		t = fx_min64(t, rem - m->v - m->v_t_pt);
 	traj_corner_t corner;

@@ -515,6 +515,30 @@ static void test_jog_retarget_while_accelerating(void **state)
 	assert_true(r.jmax[0] <= r.m.j_t_pt3);
 }
 
+/* A cruise waypoint queued while the line to the last one runs on its
+ * jerk-limited profile (planned from rest to rest): the line keeps its
+ * plan and stops on its waypoint to the raw unit, within the jerk; the
+ * route goes on from there. */
+static void test_waypoint_queued_on_a_planned_line(void **state)
+{
+	(void)state;
+	jrig_t r;
+	jrig_init(&r, MOTION_KIN_DIFF);
+	assert_true(motion_cruise_abs(&r.m, (q32_t)1000 << 32, 0));
+	for (int i = 0; i < 300; i++)
+		jrig_tick(&r);
+	assert_true(r.m.lim_j > 0 && r.m.sc_on);
+	assert_true(motion_cruise_abs(&r.m, (q32_t)1000 << 32, (q32_t)1000 << 32));
+	while (r.m.q_count == 2 && r.moving_ticks < 20000)
+		jrig_tick(&r);
+	assert_int_equal(r.m.ref.x_mm, (q32_t)1000 << 32);
+	assert_int_equal(r.m.ref.y_mm, 0);
+	assert_true(r.jmax[0] <= r.m.j_t_pt3);
+	jrig_run(&r, 20000);
+	assert_int_equal(r.m.ref.x_mm, (q32_t)1000 << 32);
+	assert_int_equal(r.m.ref.y_mm, (q32_t)1000 << 32);
+}
+
 /* What $jerk and the configuration take: 0, or at least 64 raw units a
  * tick^3 at the tick rate, at most VS_JERK_MAX and the limit; never a
  * number that is not finite. */
@@ -554,6 +578,7 @@ int main(void)
 	    cmocka_unit_test(test_jog_s_curve),
 	    cmocka_unit_test(test_omni_jog_vector_limits),
 	    cmocka_unit_test(test_jerk_fits),
+	    cmocka_unit_test(test_waypoint_queued_on_a_planned_line),
 	    cmocka_unit_test(test_new_speed_while_accelerating),
 	    cmocka_unit_test(test_jog_retarget_while_accelerating),
 	};
