@@ -2,7 +2,8 @@
  * current limits, the configured encoders), as `make run` starts it, for
  * both shipped configurations: every point-to-point move at up to the
  * acceleration limit ends in position without overshoot, Ready comes
- * promptly after the reference ends, and nothing drifts after it. The
+ * promptly after the reference ends, and nothing drifts after it (and
+ * the same with the jerk-limited example configuration). The
  * figures come from tools/bench/plantmetrics (the bench's section 2b), from
  * a trace of every tick.
  *
@@ -103,6 +104,14 @@ static void test_differential(void **state)
 {
 	(void)state;
 	all_moves("config/vehicle.xml", "diff");
+}
+
+/* The same on the jerk-limited example (docs/jerk.md): the moves from rest
+ * to rest on the S-curve, the rest as without. */
+static void test_jerk_limited(void **state)
+{
+	(void)state;
+	all_moves("config/vehicle-jerk.xml", "jerk");
 }
 
 static void test_mecanum(void **state)
@@ -227,6 +236,7 @@ int main(void)
 	const struct CMUnitTest tests[] = {
 	    cmocka_unit_test(test_differential),
 	    cmocka_unit_test(test_mecanum),
+	    cmocka_unit_test(test_jerk_limited),
 	    cmocka_unit_test(test_push_at_rest),
 	    cmocka_unit_test(test_push_past_the_following_error),
 	    cmocka_unit_test(test_sideways_push_skids_a_differential_base),
