@@ -169,12 +169,18 @@ static bool jerk_applies(const vehicle_t *v, const fx_twist_t *t)
 	}
 }
 
+/* The mode the tick began in (an action between two ticks may have
+ * switched it): a tick counts only when that mode honours the jerk too. */
+static uint8_t mode_pre;
+
 static void check_jerk(const vehicle_t *v, const fx_twist_t *t)
 {
 	const motion_t *m = &v->motion;
 	fx_twist_t acc = {t->vx_pt - prev_cmd.vx_pt, t->vy_pt - prev_cmd.vy_pt,
 			  t->w_pt - prev_cmd.w_pt};
-	bool applies = jerk_applies(v, t) && prev_servo;
+	bool pre_ok = mode_pre == MODE_IDLE || mode_pre == MODE_JOG || mode_pre == MODE_JOYSTICK ||
+		      (mode_pre == MODE_PATH && S.cfg.kinematics == VS_KIN_DIFF);
+	bool applies = jerk_applies(v, t) && prev_servo && pre_ok;
 	/* The set jerk while moving, the limit while braking: the larger
 	 * bounds both. 16 raw units of slack, as for the acceleration. */
 	double jt = (double)fx_max64(m->j_t_pt3, m->jmax_t_pt3) + 16;
@@ -282,6 +288,7 @@ static void tick(void)
 {
 	if (plan_budget)
 		vehicle_plan_idle(&S.vehicle);
+	mode_pre = motion_mode(&S.vehicle.motion);
 	sim_tick(&S);
 	check_tick();
 }
