@@ -45,7 +45,9 @@ static void on_write(void *ctx, const char *s, size_t n)
 static bool extra(void *ctx, int argc, char **argv, char *reply, size_t cap)
 {
 	if (argc >= 2 && strcmp(argv[0], "$wait") == 0) {
-		long ms = strtol(argv[1], NULL, 10);
+		/* Read as the simulator reads it (base 0: "0x231020" is 38
+		 * minutes, which a base-10 read took for 0). */
+		long ms = strtol(argv[1], NULL, 0);
 		if (ms > WAIT_CAP_MS || ms < 0) {
 			snprintf(reply, cap, "error 8 capped");
 			return true;
