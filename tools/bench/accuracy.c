@@ -185,22 +185,36 @@ static void run(const char *name, const char *what, pt_t target)
 	printf("  calls: %s engine %d reference %d\n", name, ne, nr);
 }
 
-int main(void)
+/* The single-piece moves, at the jerk set in jerk_t, jerk_r; sfx names
+ * them ("" or "_jerk"). */
+static void single_moves(const char *sfx, const char *at)
 {
+	char name[32], what[128];
 	setup();
 	if (!motion_forward(&eng, q(10000)) || !ref_forward(&ref, 10000))
 		fail("forward");
-	run("line", "moveForward 10000 (10 m)", (pt_t){10000, 0, 0});
+	snprintf(name, sizeof(name), "line%s", sfx);
+	snprintf(what, sizeof(what), "moveForward 10000 (10 m)%s", at);
+	run(name, what, (pt_t){10000, 0, 0});
 
 	setup();
 	if (!motion_turn(&eng, q(360)) || !ref_turn(&ref, 360))
 		fail("turn");
-	run("turn", "moveTurn 360", (pt_t){0, 0, 0});
+	snprintf(name, sizeof(name), "turn%s", sfx);
+	snprintf(what, sizeof(what), "moveTurn 360%s", at);
+	run(name, what, (pt_t){0, 0, 0});
 
 	setup();
 	if (!motion_circular_rel(&eng, 0, q(1000), q(90)) || !ref_arc(&ref, 0, 1000, 90))
 		fail("arc");
-	run("arc", "moveCircularRel centre (0, 1000), 90 deg (1 m radius)", (pt_t){1000, 1000, 90});
+	snprintf(name, sizeof(name), "arc%s", sfx);
+	snprintf(what, sizeof(what), "moveCircularRel centre (0, 1000), 90 deg (1 m radius)%s", at);
+	run(name, what, (pt_t){1000, 1000, 90});
+}
+
+int main(void)
+{
+	single_moves("", "");
 
 	setup();
 	for (int i = 0; i < ROUTE_N; i++)
@@ -218,20 +232,6 @@ int main(void)
 	 * own search and counting. */
 	jerk_t = 2000;
 	jerk_r = 1000;
-	setup();
-	if (!motion_forward(&eng, q(10000)) || !ref_forward(&ref, 10000))
-		fail("forward");
-	run("line_jerk", "moveForward 10000 at 2000 mm/s^3", (pt_t){10000, 0, 0});
-
-	setup();
-	if (!motion_turn(&eng, q(360)) || !ref_turn(&ref, 360))
-		fail("turn");
-	run("turn_jerk", "moveTurn 360 at 1000 deg/s^3", (pt_t){0, 0, 0});
-
-	setup();
-	if (!motion_circular_rel(&eng, 0, q(1000), q(90)) || !ref_arc(&ref, 0, 1000, 90))
-		fail("arc");
-	run("arc_jerk", "moveCircularRel centre (0, 1000), 90 deg at 2000 mm/s^3, 1000 deg/s^3",
-	    (pt_t){1000, 1000, 90});
+	single_moves("_jerk", ", jerk 2000 mm/s^3, 1000 deg/s^3");
 	return 0;
 }
