@@ -34,39 +34,12 @@ size_t strlen(const char *s)
 	return (size_t)(p - s);
 }
 
-/* memcpy, memmove and memset: a word at a time once aligned (memcpy when
- * both ends share the offset, as the firmware's structs and strings do),
- * else a byte at a time. newlib's ones cost 720 bytes of flash, these
- * about 250. The attribute keeps the
+/* memmove and memset: a word at a time once aligned, else a byte at a
+ * time; newlib's cost some 400 bytes of flash more. memcpy stays newlib's:
+ * the requests that copy most (getActiveAlarm) need its speed to answer
+ * within a period. The attribute keeps the
  * compiler from turning the loops back into calls to themselves. */
 #define NO_LOOP_CALLS __attribute__((optimize("no-tree-loop-distribute-patterns")))
-
-NO_LOOP_CALLS void *memcpy(void *restrict dst, const void *restrict src, size_t n)
-{
-	unsigned char *d = dst;
-	const unsigned char *s = src;
-	if ((((uintptr_t)d ^ (uintptr_t)s) & 3u) == 0) {
-		/* Same offset in a word: bytes up to the boundary, then words,
-		 * four at a time while they last. */
-		for (; n && ((uintptr_t)d & 3u); n--)
-			*d++ = *s++;
-		uint32_t *dw = (uint32_t *)(void *)d;
-		const uint32_t *sw = (const uint32_t *)(const void *)s;
-		for (; n >= 16; n -= 16, dw += 4, sw += 4) {
-			dw[0] = sw[0];
-			dw[1] = sw[1];
-			dw[2] = sw[2];
-			dw[3] = sw[3];
-		}
-		for (; n >= 4; n -= 4)
-			*dw++ = *sw++;
-		d = (unsigned char *)dw;
-		s = (const unsigned char *)sw;
-	}
-	while (n--)
-		*d++ = *s++;
-	return dst;
-}
 
 NO_LOOP_CALLS void *memmove(void *dst, const void *src, size_t n)
 {
