@@ -114,6 +114,41 @@
  * never changes by more than j and never exceeds amax; an acceleration
  * pointing away from the target (a new target, a brake from accelerating)
  * is first turned round at j.
+ *
+ * 6. Jerk-limited line between speeds (traj_ln_*)
+ *
+ * From speed c_in to c_out (both at zero acceleration) over exactly len:
+ * a ramp to the line speed w, K ticks at w, a ramp to c_out,
+ *
+ *     u = c_in + (w - c_in) G1 + (c_out - w) G2(. - L1 - K),
+ *
+ * G = H * b_Na * b_Nj the step through two boxes (section 4): it rises
+ * from 0 to 1 in L = Na + Nj - 1 ticks, at most 1 / Na a tick and 1 /
+ * (Na Nj) a tick^2, so a ramp of Delta needs Delta / Na <= A and
+ * Delta / (Na Nj) <= J (Na >= Nj). Its steps sum to L - (Na + Nj - 2) / 2,
+ * so a ramp of Delta, sampled by traj_sc_next as the rise of a profile
+ * that never comes down (Nv beyond reach, d / P = Delta / (Na Nj)), covers
+ * Delta L beyond its start speed less R(Delta) = floor(Delta (Na + Nj) / 2)
+ * below its end speed:
+ *
+ *     D(w, K) = c_in L1 +- R(|w - c_in|) + w (K + L2) - R(w - c_out).
+ *
+ * With the box lengths fixed (planned for the largest Delta they serve),
+ * D grows with w by B = (Na1 + Nj1) / 2 + K + (Na2 + Nj2) / 2 - 1 (up to
+ * the floors' 1) per raw unit, which is less than the N = L1 + K + L2
+ * ticks of the line: some integer w leaves a remainder r = len - D in
+ * [0, N), and r more steps of one raw unit, spread evenly (the k-th tick
+ * gets floor(r (k + 1) / N) - floor(r k / N)), land the line on len. The
+ * spread adds at most 1 to a speed, 1 to a change of speed and 2 to a
+ * jerk, the ramps' floors at most 1 and 3 beyond the exact values: the
+ * plan keeps the line speed 1, A 2 and J 5 raw units below the limits.
+ * The spread's first tick adds 0 (r < N), so the line starts at c_in.
+ * When even w = max(c_in, c_out) with a tick more covers too much, the
+ * hold takes the rest: the remainder r as a bump above w, or what the
+ * tick more covers too much as a dip below w, each the rest-to-rest
+ * S-curve of section 4 (within the limits on its own, as the hold has
+ * none of the ramps' acceleration; a tick at w either side), and the line
+ * lands with no remainder.
  */
 #ifndef TRAJ_H
 #define TRAJ_H
@@ -169,6 +204,24 @@ typedef struct {
 bool traj_sc_plan(traj_sc_t *p, q32_t d, q32_t v, q32_t a, q32_t j);
 /* The next step (0 once the profile is complete); the steps sum to d. */
 q32_t traj_sc_next(traj_sc_t *p);
+/* A planned jerk-limited line between speeds and its sampler (section 6). */
+typedef struct {
+	traj_sc_t ramp;		    /* the ramp running (phases 0 and 2) */
+	traj_sc_t dip;		    /* off w in the hold (ticks 0: none) */
+	int64_t dsign;		    /* above w (1) or below (-1) */
+	int64_t na1, nj1, na2, nj2; /* the ramps' box lengths (0: no ramp) */
+	int64_t cin, w, cout;	    /* speeds in, on the line, out */
+	int64_t l1, hold, n;	    /* ticks: first ramp, at w, in all */
+	int64_t r, racc, k;	    /* the spread remainder, its sum, ticks taken */
+} traj_ln_t;
+
+/* Plans len (> 0) from speed cin to cout (each at most v - 1) at speed at
+ * most v, acceleration a and jerk j; false when the line is too short to
+ * go from cin to cout with w >= cout, or the limits leave no room for the
+ * margins. */
+bool traj_ln_plan(traj_ln_t *p, q32_t len, q32_t cin, q32_t cout, q32_t v, q32_t a, q32_t j);
+/* The next step: the steps sum to len over p->n ticks, then cout each. */
+q32_t traj_ln_next(traj_ln_t *p);
 /* One tick of a jerk-limited change of the speed *v toward target (section
  * 5); *acc is the last tick's change and becomes this tick's. Returns the
  * new speed. */

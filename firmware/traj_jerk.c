@@ -147,3 +147,181 @@ q32_t traj_jslew(q32_t *v, q32_t *acc, q32_t target, q32_t amax, q32_t j)
 	*v += *acc;
 	return *v;
 }
+
+/* A ramp's box lengths (Na >= Nj, traj.h section 6): the shortest that
+ * change the speed by delta (> 0) within am and jm. */
+static void ramp_shape(int64_t delta, int64_t am, int64_t jm, int64_t *na, int64_t *nj)
+{
+	int64_t t0 = fx_min64(am / jm, (int64_t)fx_isqrt64((uint64_t)(delta / jm)));
+	int64_t best = INT64_MAX;
+	for (int64_t t = fx_max64(t0 - 1, 1); t <= t0 + 2; t++) {
+		int64_t n = fx_max64(t, ceil_div(delta, am));
+		n = fx_max64(n, ceil_div(delta, mul_sat(jm, t)));
+		if (n + t < best) {
+			best = n + t;
+			*na = n;
+			*nj = t;
+		}
+	}
+}
+
+/* True when boxes na, nj carry a ramp of delta within am and jm. */
+static bool ramp_serves(int64_t delta, int64_t am, int64_t jm, int64_t na, int64_t nj)
+{
+	return delta <= mul_sat(am, na) && delta <= mul_sat(mul_sat(jm, na), nj);
+}
+
+/* The ramp of delta on boxes na, nj (delta = 0: none) as the rise of an
+ * S-curve that never comes down (traj.h, section 6). */
+static void ramp_start(traj_sc_t *s, int64_t delta, int64_t na, int64_t nj)
+{
+	*s = (traj_sc_t){.nv = INT64_MAX / 4, .na = na, .nj = nj, .ticks = INT64_MAX};
+	s->p = na * nj;
+	s->qd = delta / s->p;
+	s->rd = delta % s->p;
+}
+
+/* The line's distance at speed w with k ticks at it, on the boxes in p:
+ * D(w, K) of traj.h, section 6. */
+static int64_t ln_dist(const traj_ln_t *p, int64_t w, int64_t k)
+{
+	int64_t d1 = w - p->cin, l1 = p->na1 + p->nj1 - 1, l2 = p->na2 + p->nj2 - 1;
+	int64_t r1 = mul_sat(fx_abs64(d1), p->na1 + p->nj1) / 2;
+	int64_t r2 = mul_sat(w - p->cout, p->na2 + p->nj2) / 2;
+	return p->cin * l1 + (d1 < 0 ? -r1 : r1) + mul_sat(w, k + l2) - r2;
+}
+
+/* The ramps' boxes for line speed w (one at least, so that L >= 1). */
+static void ln_shapes(traj_ln_t *p, int64_t w1, int64_t w2, int64_t am, int64_t jm)
+{
+	p->na1 = p->nj1 = p->na2 = p->nj2 = 1;
+	if (w1 != p->cin)
+		ramp_shape(fx_abs64(w1 - p->cin), am, jm, &p->na1, &p->nj1);
+	if (w2 != p->cout)
+		ramp_shape(w2 - p->cout, am, jm, &p->na2, &p->nj2);
+}
+
+static bool ln_fits(traj_ln_t *p, int64_t w, int64_t len, int64_t am, int64_t jm)
+{
+	ln_shapes(p, w, w, am, jm);
+	return ln_dist(p, w, 0) <= len;
+}
+
+bool traj_ln_plan(traj_ln_t *p, q32_t len, q32_t cin, q32_t cout, q32_t v, q32_t a, q32_t j)
+{
+	int64_t vm = v - 1, am = a - 2, jm = j - 5;
+	*p = (traj_ln_t){.cin = cin, .cout = cout};
+	if (len <= 0 || am < 1 || jm < 1 || cin < 0 || cout < 0 || cout > vm)
+		return false;
+	int64_t lo, hi = vm, wmin, w;
+	if (cin > vm) {
+		/* Above the limit (a lowered one): down to it first, and no
+		 * faster. The first ramp's boxes serve down to 1/64 below it,
+		 * which leaves the search below room. */
+		lo = vm;
+		wmin = vm - vm / 64;
+		ln_shapes(p, wmin, lo, am, jm);
+		if (ln_dist(p, lo, 0) > len)
+			return false;
+	} else {
+		/* The fastest line speed that fits with no ticks at it, to
+		 * 1/256 of it. From max(cin, cout) up the distance grows with
+		 * w; below, the two ramps one way are longer than the one ramp
+		 * that w = cin gives (their times add up to more, the extra A /
+		 * J or sqrt term), so when that does not fit, nothing does. */
+		lo = wmin = fx_max64(cin, cout);
+		if (ln_fits(p, hi, len, am, jm)) {
+			lo = hi;
+		} else {
+			if (!ln_fits(p, lo, len, am, jm))
+				return false;
+			while (hi - lo > 1 && hi - lo > lo >> 8) {
+				int64_t mid = lo + (hi - lo) / 2;
+				if (ln_fits(p, mid, len, am, jm))
+					lo = mid;
+				else
+					hi = mid;
+			}
+		}
+		ln_shapes(p, lo, lo, am, jm);
+	}
+	if (lo < 1)
+		return false;
+	/* The ticks at it, and what is left. On the boxes planned for lo
+	 * (they serve every w from max(cin, cout) to lo), D grows with w by
+	 * about B a raw unit, less than N (traj.h): a remainder of N or more
+	 * takes one tick more at the fastest w from wmin that still fits,
+	 * which leaves less than B + 1. */
+	int64_t k = (len - ln_dist(p, lo, 0)) / lo;
+	w = lo;
+	if (len - ln_dist(p, w, k) >= p->na1 + p->nj1 + k + p->na2 + p->nj2 - 2) {
+		k++;
+		int64_t top = lo;
+		w = wmin;
+		int64_t over = ln_dist(p, w, k) - len;
+		if (over > 0) {
+			/* Even at wmin a tick more covers too much: the hold at lo
+			 * covers the remainder as a bump above lo (an S-curve at
+			 * the limits, inside the hold), or the hold at wmin gives
+			 * back what is too much as a dip below it; or the line
+			 * cannot go. */
+			int64_t rem = len - ln_dist(p, lo, k - 1);
+			if (lo < vm && traj_sc_plan(&p->dip, rem, vm - lo + 1, a, j) &&
+			    p->dip.ticks + 2 <= k - 1) {
+				p->dsign = 1;
+				k--;
+				w = lo;
+			} else if (traj_sc_plan(&p->dip, over, w + 1, a, j) &&
+				   p->dip.ticks + 2 <= k) {
+				p->dsign = -1;
+			} else {
+				return false;
+			}
+			top = w;
+		}
+		while (top - w > 1) {
+			int64_t mid = w + (top - w) / 2;
+			if (ln_dist(p, mid, k) <= len)
+				w = mid;
+			else
+				top = mid;
+		}
+	}
+	if (w < cout || w > vm || w < 1 ||
+	    !ramp_serves(fx_abs64(w - cin), am, jm, p->na1, p->nj1) ||
+	    !ramp_serves(w - cout, am, jm, p->na2, p->nj2))
+		return false;
+	p->w = w;
+	p->hold = k;
+	p->l1 = p->na1 + p->nj1 - 1;
+	p->n = p->l1 + k + p->na2 + p->nj2 - 1;
+	p->r = p->dsign ? 0 : len - ln_dist(p, w, k); /* a bump or dip takes it all */
+	ramp_start(&p->ramp, fx_abs64(w - cin), p->na1, p->nj1);
+	return true;
+}
+
+q32_t traj_ln_next(traj_ln_t *p)
+{
+	if (p->k >= p->n)
+		return p->cout;
+	int64_t k = p->k++, u;
+	if (k < p->l1) {
+		q32_t s = traj_sc_next(&p->ramp);
+		u = p->w >= p->cin ? p->cin + s : p->cin - s;
+	} else if (k < p->l1 + p->hold) {
+		/* A tick at w either side of a dip: its jerks and the ramps'
+		 * never meet. */
+		u = k > p->l1 ? p->w + p->dsign * traj_sc_next(&p->dip) : p->w;
+	} else {
+		if (k == p->l1 + p->hold)
+			ramp_start(&p->ramp, p->w - p->cout, p->na2, p->nj2);
+		u = p->w - traj_sc_next(&p->ramp);
+	}
+	/* The remainder, spread (traj.h, section 6). */
+	p->racc += p->r;
+	if (p->racc >= p->n) {
+		p->racc -= p->n;
+		u++;
+	}
+	return u;
+}
