@@ -144,6 +144,13 @@ typedef struct {
 	 * (sc_on below: it runs) and the last tick's change of speed. */
 	traj_sc_t sc;
 	q32_t acc;
+	/* A new speed limit while on the profile: the line from the speed
+	 * reached to rest (ln_on), planned once the acceleration is zero
+	 * (glide: brought there at the jerk); plan_cap is the limit the
+	 * running profile was planned for. */
+	traj_ln_t ln;
+	q32_t plan_cap;
+	bool ln_on, glide;
 
 	/* Jog / joystick velocity target (body frame, per tick), and the last
 	 * tick's change of velocity (the jerk-limited slew's state). */

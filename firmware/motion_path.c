@@ -467,20 +467,61 @@ static void stop_done(motion_t *m)
 	m->mode = m->q_count ? MODE_PATH : MODE_IDLE;
 }
 
+/* The profile that runs is dropped (braking, a new plan). */
+static void plan_drop(motion_t *m)
+{
+	m->sc_on = m->ln_on = m->glide = false;
+}
+
+/* A new speed limit while the profile runs (setVelocity, the caution
+ * input). Lowered below what lies ahead, the unit glides down to it: the
+ * acceleration to zero at the jerk, then the line from that speed to rest
+ * (traj.h, section 6); in the last ramp to rest, whose speeds only fall,
+ * it brakes at the limits if it is above the new one (and plans again at
+ * rest). Raised, the line from the speed held (zero acceleration: nothing
+ * steps) is planned at once; accelerating or slowing, the profile runs on
+ * until it holds. */
+static void plan_new_limit(motion_t *m)
+{
+	bool last_ramp = m->sc_on ? m->sc.k >= m->sc.nv : m->ln.k > m->ln.l1 + m->ln.hold;
+	q32_t top = m->sc_on ? m->sc.vm : fx_max64(m->ln.w, m->v);
+	if (last_ramp) {
+		if (m->v >= m->lim_vmax)
+			plan_drop(m);
+	} else if (m->lim_vmax <= top || (m->lim_vmax > m->plan_cap && m->acc == 0)) {
+		plan_drop(m);
+		m->glide = true;
+	}
+}
+
 /* A piece from rest to rest under a jerk limit: the planned S-curve
- * (traj.h, section 4) over what is left of it. Braking (pause, stop), or
- * resumed while still braking, it changes speed toward rest at the limits
- * (section 5) and plans the rest of the piece once at rest. Out of line:
- * the acceleration-limited pieces do not pay for it. */
+ * (traj.h, section 4) over what is left of it, or after a new speed limit
+ * the line from the speed then to rest (section 6). Braking (pause, stop),
+ * or resumed while still braking, it changes speed toward rest at the
+ * limits (section 5) and plans the rest of the piece once at rest. Out of
+ * line: the acceleration-limited pieces do not pay for it. */
 static q32_t sc_speed(motion_t *m, bool braking)
 {
 	q32_t rem = m->seg.len - m->seg.s;
-	/* A speed cap lowered below the plan's (setVelocity, the caution
-	 * input) ends it: the unit comes to rest and plans again. */
-	if (m->sc_on && m->lim_vmax <= m->sc.vm)
-		m->sc_on = false;
-	if (braking || (!m->sc_on && m->v > 0)) {
-		m->sc_on = false;
+	if (braking)
+		plan_drop(m);
+	else if ((m->sc_on || m->ln_on) && m->v > 0 && m->lim_vmax != m->plan_cap)
+		plan_new_limit(m);
+	if (m->glide) {
+		if (m->acc != 0) {
+			/* The acceleration to zero at the jerk: below the
+			 * profile's speeds, so braking still fits. */
+			q32_t a = m->acc > 0 ? fx_max64(m->acc - m->lim_j, 0)
+					     : fx_min64(m->acc + m->lim_j, 0);
+			m->acc = a;
+			return fx_min64(m->v + a, rem);
+		}
+		m->glide = false;
+		m->ln_on = traj_ln_plan(&m->ln, rem, m->v, 0, m->lim_vmax, m->lim_a, m->lim_j);
+		m->plan_cap = m->lim_vmax;
+		/* No room for the line: brake, and plan again at rest. */
+	}
+	if (braking || (!m->sc_on && !m->ln_on && m->v > 0)) {
 		q32_t v = m->v, amax = piece_limit(&m->seg, m->amax_t_pt2, m->amax_r_pt2);
 		q32_t jb = piece_jerk(&m->seg, m->jmax_t_pt3, m->jmax_r_pt3);
 		if (jb > 0) {
@@ -493,20 +534,21 @@ static q32_t sc_speed(motion_t *m, bool braking)
 		 * stops by the end: this only guards the raw unit. */
 		return fx_min64(v, rem);
 	}
-	if (!m->sc_on && m->acc != 0) {
+	if (!m->sc_on && !m->ln_on && m->acc != 0) {
 		/* The brake landed last tick (its last change of speed up to
 		 * the braking jerk): a tick at rest before the plan starts. */
 		m->acc = 0;
 		return 0;
 	}
-	if (!m->sc_on) {
+	if (!m->sc_on && !m->ln_on) {
+		m->plan_cap = m->lim_vmax;
 		if (!traj_sc_plan(&m->sc, rem, m->lim_vmax, m->lim_a, m->lim_j)) {
 			m->lim_j = 0; /* no room for the rounding margins: as without */
 			return traj_step(m->v, rem, m->lim_vmax, m->lim_a);
 		}
 		m->sc_on = true;
 	}
-	q32_t u = traj_sc_next(&m->sc);
+	q32_t u = m->ln_on ? traj_ln_next(&m->ln) : traj_sc_next(&m->sc);
 	m->acc = u - m->v;
 	return u;
 }
@@ -598,7 +640,7 @@ static inline __attribute__((always_inline)) bool piece_finish(motion_t *m)
 	 * to a jerk): what follows runs on the acceleration-limited profile. */
 	if (m->lim_j) {
 		m->lim_j = 0;
-		m->sc_on = false;
+		plan_drop(m);
 	}
 	return true;
 }
@@ -609,7 +651,7 @@ static inline __attribute__((always_inline)) bool piece_finish(motion_t *m)
 static inline __attribute__((always_inline)) void piece_begin(motion_t *m)
 {
 	m->seg.s = 0;
-	m->sc_on = false;
+	plan_drop(m);
 	m->lim_j = m->v == 0 && !blends_onward(m, m->seg.kind)
 		       ? piece_jerk(&m->seg, m->j_t_pt3, m->j_r_pt3)
 		       : 0;

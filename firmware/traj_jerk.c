@@ -279,12 +279,15 @@ bool traj_ln_plan(traj_ln_t *p, q32_t len, q32_t cin, q32_t cout, q32_t v, q32_t
 			}
 			top = w;
 		}
-		while (top - w > 1) {
-			int64_t mid = w + (top - w) / 2;
-			if (ln_dist(p, mid, k) <= len)
-				w = mid;
-			else
-				top = mid;
+		if (top > w) {
+			/* D is linear in w but for the floors (slope B, twice it
+			 * b2): a step from wmin, then a unit or two either way. */
+			int64_t b2 = p->na1 + p->nj1 + p->na2 + p->nj2 + 2 * k - 2;
+			w = fx_min64(top, w + 2 * (len - ln_dist(p, w, k)) / b2);
+			while (w > wmin && ln_dist(p, w, k) > len)
+				w--;
+			while (w < top && ln_dist(p, w + 1, k) <= len)
+				w++;
 		}
 	}
 	if (w < cout || w > vm || w < 1 ||

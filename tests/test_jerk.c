@@ -575,6 +575,56 @@ static void test_new_speed_while_accelerating(void **state)
 	}
 }
 
+/* setVelocity while moving glides: a 3000 mm move at 500 mm/s gets a new
+ * speed limit while accelerating (tick 400) or holding (tick 1500). Lowered
+ * to 200 mm/s, the unit comes down to it without stopping and holds it
+ * once the ramp down is done (0.85 s at 500 mm/s^2 and 2000 mm/s^3, plus
+ * the acceleration's turn); raised to 800 mm/s from the hold, it climbs to
+ * within 1 % of it. Every tick is within the set acceleration and jerk,
+ * the move never stands still before its end, and it lands on 3000 mm to
+ * the raw unit. */
+static void test_new_speed_glides(void **state)
+{
+	(void)state;
+	const int at[2] = {400, 1500};
+	for (int raise = 0; raise < 2; raise++)
+		for (int w = 0; w < 2; w++) {
+			jrig_t r;
+			jrig_init(&r, MOTION_KIN_DIFF);
+			assert_true(motion_forward(&r.m, (q32_t)3000 << 32));
+			for (int i = 0; i < at[w]; i++)
+				jrig_tick(&r);
+			q32_t cap = (q32_t)(raise ? 800 : 200) << 32;
+			motion_set_velocity(&r.m, cap, (q32_t)90 << 32);
+			jrig_reset_peaks(&r);
+			int ticks = 0, stood = 0;
+			q32_t late_max = 0;
+			while (motion_has_work(&r.m) && ticks < 20000) {
+				jrig_tick(&r);
+				ticks++;
+				if (motion_has_work(&r.m) && r.u1[0] == 0)
+					stood++;
+				if (ticks > 1200 && r.u1[0] > late_max)
+					late_max = r.u1[0];
+			}
+			jrig_tick(&r);
+			assert_int_equal(r.m.ref.x_mm, (q32_t)3000 << 32);
+			assert_int_equal(stood, 0);
+			printf("glide raise %d at %d: %d ticks, peak %.2f mm/s, late %.2f, amax "
+			       "%.1f jmax %.1f\n",
+			       raise, at[w], ticks, r.vmax[0] * 1000 / Q, late_max * 1000 / Q,
+			       r.amax[0] * 1e6 / Q, r.jmax[0] * 1e9 / Q);
+			assert_true(r.amax[0] <= r.m.a_t_pt2);
+			assert_true(r.jmax[0] <= r.m.j_t_pt3);
+			if (raise && w == 1) {
+				assert_true(r.vmax[0] <= cap / 1000);
+				assert_true(r.vmax[0] >= cap / 1000 - cap / 100000);
+			}
+			if (!raise)
+				assert_true(late_max <= cap / 1000);
+		}
+}
+
 /* A new jog velocity while accelerating (a retarget of the jog): the
  * acceleration turns round at the jerk, never in a step. */
 static void test_jog_retarget_while_accelerating(void **state)
@@ -662,6 +712,7 @@ int main(void)
 	    cmocka_unit_test(test_jerk_fits),
 	    cmocka_unit_test(test_waypoint_queued_on_a_planned_line),
 	    cmocka_unit_test(test_new_speed_while_accelerating),
+	    cmocka_unit_test(test_new_speed_glides),
 	    cmocka_unit_test(test_jog_retarget_while_accelerating),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);

@@ -85,8 +85,8 @@ __attribute__((used)) void _exit(int code)
 int main(void)
 {
 	static const bench_hooks_t hooks = {tick, retarget};
-	static const char *const names[] = {"idle",	"line",	     "cruise",	"jog",
-					    "retarget", "line_jerk", "jog_jerk"};
+	static const char *const names[] = {"idle",	"line",	     "cruise",	 "jog",
+					    "retarget", "line_jerk", "jog_jerk", "speed_jerk"};
 
 	uart_init();
 	systick_init(1000u);

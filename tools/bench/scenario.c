@@ -50,6 +50,20 @@ long bench_scenario(rig_t *r, const char *sc, const bench_hooks_t *h)
 				need(vs_moveJog(&r->v, 300.0, 0.0, 30.0), "moveJog");
 			tick(r, h, "tick");
 		}
+	} else if (strcmp(sc, "speed_jerk") == 0) {
+		need(vehicle_set_jerk(&r->v, 2000.0, 1000.0), "$jerk");
+		need(vs_moveForward(&r->v, 3000.0), "moveForward");
+		/* Raised on the hold, lowered on the new one: each plans a line
+		 * from the speed held within a tick or two. */
+		for (int i = 0; motion_has_work(&r->v.motion); i++) {
+			if (i == 1500 || i == 2600) {
+				vs_velocity_t s = {i == 1500 ? 800.0 : 300.0, 90.0};
+				need(vs_setVelocity(&r->v, s), "setVelocity");
+				for (int k = 0; k < 3; k++, i++)
+					tick(r, h, "tick-after-speed");
+			}
+			tick(r, h, "tick");
+		}
 	} else if (strcmp(sc, "retarget") == 0) {
 		need(vs_moveContinuousRel(&r->v, (vs_position_t){3000.0, 0.0, 0.0}),
 		     "moveContinuousRel");
