@@ -170,7 +170,9 @@ void motion_halt(motion_t *m)
 	m->seg.kind = SEG_NONE;
 	m->v = 0;
 	m->acc = 0;
-	m->sc_on = m->ln_on = m->glide = false;
+	m->sc_on = m->ln_on = m->glide = m->hold_on = m->fresh = false;
+	m->ln_next = LN_NEXT_NONE;
+	m->face_ok = false;
 	m->vel = (fx_twist_t){0};
 	m->vacc = (fx_twist_t){0};
 	m->vtarget = (fx_twist_t){0};

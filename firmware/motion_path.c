@@ -42,11 +42,25 @@ static void seg_turn(motion_t *m, q32_t angle)
 	g->p_end.th_deg = fx_wrap_deg(m->ref.th_deg + angle);
 }
 
+/* Where cruise command c's straight part ends (its corner's entry, or its
+ * waypoint), and its length from (x, y) along its direction: no square
+ * root or division in the tick that blends into it. */
+static inline void cruise_line_end(const motion_cmd_t *c, fx_pose_t *e)
+{
+	q32_t t = c->has_corner ? c->corner.t_mm : 0;
+	e->x_mm = c->target.x_mm - fx_mul_q30(t, c->ux);
+	e->y_mm = c->target.y_mm - fx_mul_q30(t, c->uy);
+}
+
+static inline q32_t line_len_from(const motion_cmd_t *c, const fx_pose_t *e, q32_t x, q32_t y)
+{
+	q32_t len = fx_mul_q30(e->x_mm - x, c->ux) + fx_mul_q30(e->y_mm - y, c->uy);
+	return len > 0 ? len : 0;
+}
+
 /* The straight part of cruise command c, from the reference (its start, or
  * the previous corner's exit) along the direction planned when it was
- * queued, to its corner's entry or its waypoint. The length is measured
- * along that direction: no square root or division in the tick that blends
- * into it. The heading is already along the line (turn or corner before). */
+ * queued. The heading is already along the line (turn or corner before). */
 static void cruise_line(motion_t *m, const motion_cmd_t *c)
 {
 	const fx_pose_t *r = &m->ref;
@@ -61,13 +75,9 @@ static void cruise_line(motion_t *m, const motion_cmd_t *c)
 	g->uy = c->uy;
 	g->dth = 0;
 	g->cx = g->cy = 0;
-	q32_t t = c->has_corner ? c->corner.t_mm : 0;
-	g->p_end.x_mm = c->target.x_mm - fx_mul_q30(t, c->ux);
-	g->p_end.y_mm = c->target.y_mm - fx_mul_q30(t, c->uy);
+	cruise_line_end(c, &g->p_end);
 	g->p_end.th_deg = r->th_deg;
-	q32_t len =
-	    fx_mul_q30(g->p_end.x_mm - r->x_mm, c->ux) + fx_mul_q30(g->p_end.y_mm - r->y_mm, c->uy);
-	g->len = len > 0 ? len : 0;
+	g->len = line_len_from(c, &g->p_end, r->x_mm, r->y_mm);
 }
 
 /* The corner of cruise command c, from the reference: the piece still holds
@@ -201,6 +211,16 @@ static stage_t line_stage_diff(motion_t *m, motion_cmd_t *c)
 	}
 }
 
+/* The turn that faces cruise command c's waypoint from pose r (0: none,
+ * or no distance to it). */
+static q32_t cruise_face(const motion_cmd_t *c, const fx_pose_t *r)
+{
+	q32_t dx = c->target.x_mm - r->x_mm, dy = c->target.y_mm - r->y_mm;
+	if (fx_hypot(dx, dy) < TINY_MM)
+		return 0;
+	return fx_wrap_deg(fx_atan2_deg(dy, dx) - r->th_deg);
+}
+
 /* A cruise waypoint: its line's start becomes known (and the corner into
  * it is planned) when it runs first; it turns to face along its line
  * unless it arrives out of a corner, then runs its line. */
@@ -216,10 +236,14 @@ static stage_t cruise_stage(motion_t *m, motion_cmd_t *c)
 		}
 		if (m->v > 0)
 			return STAGE_SKIP; /* arriving out of a corner, already aligned */
-		q32_t dx = c->target.x_mm - r->x_mm, dy = c->target.y_mm - r->y_mm;
-		if (fx_hypot(dx, dy) < TINY_MM)
-			return STAGE_SKIP;
-		q32_t a = fx_wrap_deg(fx_atan2_deg(dy, dx) - r->th_deg);
+		q32_t a;
+		if (m->face_ok && m->face_ref.x_mm == r->x_mm && m->face_ref.y_mm == r->y_mm &&
+		    m->face_ref.th_deg == r->th_deg && m->face_to.x_mm == c->target.x_mm &&
+		    m->face_to.y_mm == c->target.y_mm)
+			a = m->face_a; /* worked out ahead, from here */
+		else
+			a = cruise_face(c, r);
+		m->face_ok = false;
 		if (fx_abs64(a) < 1)
 			return STAGE_SKIP;
 		seg_turn(m, a);
@@ -456,35 +480,74 @@ static bool blends_onward(motion_t *m, uint8_t finished_kind)
 	return finished_kind == SEG_LINE || finished_kind == SEG_CORNER;
 }
 
+/* The profile that runs is dropped (braking, a new plan). */
+static void plan_drop(motion_t *m)
+{
+	m->sc_on = m->ln_on = m->glide = m->hold_on = false;
+}
+
 /* A stop came to rest: the commands it braked through are discarded. */
 static void stop_done(motion_t *m)
 {
 	m->stopping = false;
 	m->acc = 0;
+	plan_drop(m);
 	while (m->stop_drop)
 		pop(m);
 	m->seg.kind = SEG_NONE;
 	m->mode = m->q_count ? MODE_PATH : MODE_IDLE;
 }
 
-/* The profile that runs is dropped (braking, a new plan). */
-static void plan_drop(motion_t *m)
+/* The speed the active piece ends at under jerk limits: a cruise line's
+ * corner speed (within the line's own cap, as traj_ln_plan takes it), or
+ * rest. */
+static q32_t piece_cout(motion_t *m)
 {
-	m->sc_on = m->ln_on = m->glide = false;
+	if (m->seg.kind != SEG_LINE || !blends_onward(m, SEG_LINE))
+		return 0;
+	return fx_min64(q_at(m, 0)->vend_pt, m->lim_vmax - 1);
+}
+
+/* The line of rem from the present speed to cout at the piece's limits:
+ * the plan made ahead for it (motion_plan_idle), or one made now. */
+static bool plan_line(motion_t *m, q32_t rem, q32_t cout)
+{
+	const q32_t *k = m->ln_key;
+	m->plan_cap = m->lim_vmax;
+	/* One test for the six: this is a cruise line's first tick. */
+	bool same = m->ln_next == LN_NEXT_PLAN &&
+		    ((k[0] ^ rem) | (k[1] ^ m->v) | (k[2] ^ cout) | (k[3] ^ m->lim_vmax) |
+		     (k[4] ^ m->lim_a) | (k[5] ^ m->lim_j)) == 0;
+	m->ln_next = LN_NEXT_NONE;
+	if (same)
+		m->ln_i ^= 1;
+	else if (!traj_ln_plan(ln_run(m), rem, m->v, cout, m->lim_vmax, m->lim_a, m->lim_j) &&
+		 (cout == 0 ||
+		  !traj_ln_plan(ln_run(m), rem, m->v, 0, m->lim_vmax, m->lim_a, m->lim_j)))
+		return false; /* the caller brakes, and plans again at rest */
+	m->ln_on = true;
+	return true;
 }
 
 /* A new speed limit while the profile runs (setVelocity, the caution
  * input). Lowered below what lies ahead, the unit glides down to it: the
- * acceleration to zero at the jerk, then the line from that speed to rest
- * (traj.h, section 6); in the last ramp to rest, whose speeds only fall,
- * it brakes at the limits if it is above the new one (and plans again at
- * rest). Raised, the line from the speed held (zero acceleration: nothing
- * steps) is planned at once; accelerating or slowing, the profile runs on
- * until it holds. */
+ * acceleration to zero at the jerk, then the line from that speed (traj.h,
+ * section 6); in the last ramp to rest, whose speeds only fall, or in a
+ * corner held at its speed, it brakes at the limits if it is above the new
+ * one (and plans again at rest). Raised, the line from the speed held
+ * (zero acceleration: nothing steps) is planned at once; accelerating or
+ * slowing, the profile runs on until it holds. */
 static void plan_new_limit(motion_t *m)
 {
-	bool last_ramp = m->sc_on ? m->sc.k >= m->sc.nv : m->ln.k > m->ln.l1 + m->ln.hold;
-	q32_t top = m->sc_on ? m->sc.vm : fx_max64(m->ln.w, m->v);
+	if (m->hold_on) {
+		if (m->hold_v > m->lim_vmax)
+			plan_drop(m);
+		return;
+	}
+	const traj_ln_t *ln = ln_run(m);
+	bool last_ramp =
+	    m->sc_on ? m->sc.k >= m->sc.nv : ln->k > ln->l1 + ln->hold && ln->cout == 0;
+	q32_t top = m->sc_on ? m->sc.vm : fx_max64(ln->w, m->v);
 	if (last_ramp) {
 		if (m->v >= m->lim_vmax)
 			plan_drop(m);
@@ -494,19 +557,50 @@ static void plan_new_limit(motion_t *m)
 	}
 }
 
-/* A piece from rest to rest under a jerk limit: the planned S-curve
- * (traj.h, section 4) over what is left of it, or after a new speed limit
- * the line from the speed then to rest (section 6). Braking (pause, stop),
- * or resumed while still braking, it changes speed toward rest at the
- * limits (section 5) and plans the rest of the piece once at rest. Out of
- * line: the acceleration-limited pieces do not pay for it. */
+/* A piece begun at speed (a cruise line or corner, under jerk limits): a
+ * corner holds the speed it is entered at (its rotation is the clothoid's),
+ * a line runs from it to its corner's speed (traj.h, section 6). */
+static void plan_at_speed(motion_t *m, q32_t rem)
+{
+	if (m->seg.kind == SEG_CORNER) {
+		m->hold_on = m->hold_v > 0 && m->hold_v <= m->lim_vmax;
+		m->plan_cap = m->lim_vmax;
+		return;
+	}
+	plan_line(m, rem, piece_cout(m));
+}
+
+/* A piece under a jerk limit. From rest to rest it runs on the planned
+ * S-curve (traj.h, section 4) over what is left of it; a cruise line runs
+ * from its speed to its corner's (section 6), and a corner holds its
+ * speed; after a new speed limit the line from the speed then. Braking
+ * (pause, stop), or resumed while still braking, it changes speed toward
+ * rest at the limits (section 5) and plans the rest of the piece once at
+ * rest. Out of line: the acceleration-limited pieces do not pay for it. */
 static q32_t sc_speed(motion_t *m, bool braking)
 {
+	/* A corner held at its speed, limit unchanged: first, as its ticks
+	 * are a cruise's dearest. */
+	if (m->hold_on && !braking && m->lim_vmax == m->plan_cap) {
+		m->acc = m->hold_v - m->v; /* a brake from here starts from it */
+		return m->hold_v;
+	}
 	q32_t rem = m->seg.len - m->seg.s;
-	if (braking)
+	if (braking) {
 		plan_drop(m);
-	else if ((m->sc_on || m->ln_on) && m->v > 0 && m->lim_vmax != m->plan_cap)
+		m->fresh = false;
+	} else if (m->fresh) {
+		m->fresh = false;
+		if (m->v > 0)
+			plan_at_speed(m, rem);
+	} else if ((m->sc_on || m->ln_on || m->hold_on) && m->v > 0 && m->lim_vmax != m->plan_cap) {
 		plan_new_limit(m);
+	}
+	if (m->hold_on) {
+		/* The crossing into the next line is path_tick's. */
+		m->acc = m->hold_v - m->v;
+		return m->hold_v;
+	}
 	if (m->glide) {
 		if (m->acc != 0) {
 			/* The acceleration to zero at the jerk: below the
@@ -517,8 +611,7 @@ static q32_t sc_speed(motion_t *m, bool braking)
 			return fx_min64(m->v + a, rem);
 		}
 		m->glide = false;
-		m->ln_on = traj_ln_plan(&m->ln, rem, m->v, 0, m->lim_vmax, m->lim_a, m->lim_j);
-		m->plan_cap = m->lim_vmax;
+		plan_line(m, rem, piece_cout(m));
 		/* No room for the line: brake, and plan again at rest. */
 	}
 	if (braking || (!m->sc_on && !m->ln_on && m->v > 0)) {
@@ -541,16 +634,93 @@ static q32_t sc_speed(motion_t *m, bool braking)
 		return 0;
 	}
 	if (!m->sc_on && !m->ln_on) {
+		/* From rest: to rest on the S-curve, into a corner on the line. */
+		q32_t cout = piece_cout(m);
 		m->plan_cap = m->lim_vmax;
-		if (!traj_sc_plan(&m->sc, rem, m->lim_vmax, m->lim_a, m->lim_j)) {
-			m->lim_j = 0; /* no room for the rounding margins: as without */
-			return traj_step(m->v, rem, m->lim_vmax, m->lim_a);
+		if (cout == 0 || !plan_line(m, rem, cout)) {
+			if (!traj_sc_plan(&m->sc, rem, m->lim_vmax, m->lim_a, m->lim_j)) {
+				m->lim_j = 0; /* no room for the rounding margins: as without */
+				return traj_step(m->v, rem, m->lim_vmax, m->lim_a);
+			}
+			m->sc_on = true;
 		}
-		m->sc_on = true;
 	}
-	q32_t u = m->ln_on ? traj_ln_next(&m->ln) : traj_sc_next(&m->sc);
+	q32_t u = m->ln_on ? traj_ln_next(ln_run(m)) : traj_sc_next(&m->sc);
 	m->acc = u - m->v;
 	return u;
+}
+
+/* The profile of a cruise line that has yet to begin, planned ahead
+ * (motion_plan_idle) for the length, speeds and limits in ln_key; true
+ * when it planned. */
+static bool plan_ahead(motion_t *m, q32_t len, q32_t cin, q32_t cout)
+{
+	q32_t v = vt_eff(m), a = m->a_t_pt2, j = m->j_t_pt3;
+	const q32_t key[6] = {len, cin, cout, v, a, j};
+	/* A key tried, planned or not, is not tried again. */
+	bool same = m->ln_next != LN_NEXT_NONE;
+	for (int i = 0; i < 6 && same; i++)
+		same = key[i] == m->ln_key[i];
+	if (same || len <= 0 || j == 0)
+		return false;
+	for (int i = 0; i < 6; i++)
+		m->ln_key[i] = key[i];
+	m->ln_next =
+	    traj_ln_plan(ln_ahead(m), len, cin, cout, v, a, j) ? LN_NEXT_PLAN : LN_NEXT_KEY;
+	return true;
+}
+
+/* The next cruise line's profile, planned ahead under jerk limits. The
+ * head's line, before it begins, starts from rest where the unit stands
+ * (a turn to face it moves no position) toward its corner's speed (one
+ * that ends at rest runs the S-curve, planned in its first tick). Or the
+ * line after the head's, while the head's line or corner runs: it begins
+ * at the corner's exit after the corner's last step carried it o = n c -
+ * 2 Lh in (the corner is entered on a tick at speed c and holds it), or
+ * where a collinear pass's line ends, at that line's last speed. */
+bool motion_plan_next_line(motion_t *m)
+{
+	if (m->mode != MODE_PATH || m->q_count == 0 || m->stopping || m->paused || !m->jerk_any)
+		return false;
+	const motion_cmd_t *c0 = q_at(m, 0);
+	if (c0->kind != MCMD_CRUISE || !c0->start_known)
+		return false;
+	fx_pose_t e;
+	q32_t v = vt_eff(m);
+	if (c0->stage < 2) {
+		if (c0->stage == 0 && !m->face_ok) {
+			/* Its first tick's turn to face it, with the line's. */
+			m->face_ref = m->ref;
+			m->face_to = c0->target;
+			m->face_a = cruise_face(c0, &m->ref);
+			m->face_ok = true;
+			return true;
+		}
+		if (!c0->has_corner || c0->vend_pt == 0)
+			return false;
+		cruise_line_end(c0, &e);
+		q32_t len = line_len_from(c0, &e, m->ref.x_mm, m->ref.y_mm);
+		return plan_ahead(m, len, 0, fx_min64(c0->vend_pt, v - 1));
+	}
+	const motion_cmd_t *c1 = q_at(m, 1);
+	if (m->q_count < 2 || m->lim_j == 0 || !c0->has_corner || c1->kind != MCMD_CRUISE ||
+	    !c1->start_known || c0->stage != 2)
+		return false;
+	q32_t c, lh2 = 2 * c0->corner.lh_mm;
+	if (m->seg.kind == SEG_LINE && m->ln_on)
+		c = lh2 ? ln_run(m)->cout : ln_run(m)->cout + (ln_run(m)->r > 0);
+	else if (m->seg.kind == SEG_CORNER && m->hold_on)
+		c = m->hold_v;
+	else
+		return false;
+	if (c <= 0)
+		return false;
+	cruise_line_end(c1, &e);
+	q32_t x = lh2 ? c0->exit_x_mm : c0->target.x_mm;
+	q32_t y = lh2 ? c0->exit_y_mm : c0->target.y_mm;
+	q32_t o = lh2 ? ((lh2 + c - 1) / c) * c - lh2 : 0;
+	q32_t cout = c1->has_corner ? fx_min64(c1->vend_pt, v - 1) : 0;
+	return plan_ahead(m, line_len_from(c1, &e, x, y) - o, c, cout);
 }
 
 /* The three parts of path_tick below are inline by force: left to the
@@ -626,6 +796,7 @@ static inline __attribute__((always_inline)) bool piece_finish(motion_t *m)
 		m->v = 0;
 		m->acc = 0;
 		m->rest_tick = true;
+		plan_drop(m);
 		return false;
 	}
 	if (kind == SEG_LINE && q_at(m, 0)->corner.lh_mm != 0) {
@@ -635,12 +806,20 @@ static inline __attribute__((always_inline)) bool piece_finish(motion_t *m)
 		corner_piece(m, q_at(m, 0));
 		limits_changed(m);
 	}
-	/* A line planned from rest to rest that a waypoint queued since
-	 * turned into a blend has landed (at the speed of its last step, up
-	 * to a jerk): what follows runs on the acceleration-limited profile. */
 	if (m->lim_j) {
-		m->lim_j = 0;
+		/* A cruise line under jerk limits ran into its corner (on a
+		 * tick, at the line's end speed): the corner holds that speed
+		 * from the next tick. A line planned from rest to rest that a
+		 * waypoint queued since turned into a blend has landed (at the
+		 * speed of its last step, up to a jerk): what follows runs on
+		 * the acceleration-limited profile. */
+		bool on = m->ln_on && ln_run(m)->cout > 0;
+		if (on)
+			m->hold_v = ln_run(m)->cout;
+		else
+			m->lim_j = 0;
 		plan_drop(m);
+		m->fresh = on;
 	}
 	return true;
 }
@@ -651,10 +830,17 @@ static inline __attribute__((always_inline)) bool piece_finish(motion_t *m)
 static inline __attribute__((always_inline)) void piece_begin(motion_t *m)
 {
 	m->seg.s = 0;
-	plan_drop(m);
-	m->lim_j = m->v == 0 && !blends_onward(m, m->seg.kind)
-		       ? piece_jerk(&m->seg, m->j_t_pt3, m->j_r_pt3)
-		       : 0;
+	m->fresh = true;
+	m->lim_j = 0;
+	/* The profiles are dropped where a piece ends (piece_finish) or the
+	 * unit stops (stop_done, motion_halt). A cruise line runs along its
+	 * heading: its jerk is the translation's. */
+	if (m->jerk_any) {
+		if (m->seg.kind == SEG_LINE && q_at(m, 0)->kind == MCMD_CRUISE)
+			m->lim_j = m->j_t_pt3;
+		else if (m->v == 0 && !blends_onward(m, m->seg.kind))
+			m->lim_j = piece_jerk(&m->seg, m->j_t_pt3, m->j_r_pt3);
+	}
 	limits_changed(m);
 }
 
@@ -757,6 +943,9 @@ void motion_tick(motion_t *m, const fx_pose_t *measured, fx_twist_t *out)
 		m->stopping = false;
 		m->rest_tick = false; /* this tick is the one at rest */
 		m->vel = (fx_twist_t){0};
+		/* At rest: a jog or joystick after a path move starts its slew
+		 * from zero acceleration, not from the last one it ran. */
+		m->vacc = (fx_twist_t){0};
 		/* Idle: follow the measured pose so relative moves start from it. */
 		if (measured)
 			m->ref = *measured;

@@ -58,6 +58,14 @@ static void pass_walk(motion_t *m, int i, uint8_t lo, q32_t next_v, q32_t next_e
 	traj_rate_t at;
 	traj_rate_init(&at, m->a_t_pt2);
 	uint32_t left = m->plan_budget ? m->plan_budget : UINT32_MAX;
+	/* Under a jerk limit a line changes speed on traj_ln's ramps
+	 * (traj.h, section 6): each takes at most A / J + 2 ticks more than
+	 * braking at A, at no more than the line speed, and the line begins
+	 * up to a step into it (the corner's last): the braking counts on that
+	 * much less of each line. */
+	q32_t slack = 0;
+	if (m->j_t_pt3 > 0)
+		slack = vt_eff(m) * (m->a_t_pt2 / m->j_t_pt3 + 4);
 	for (; i >= 0; i--) {
 		if (i + 1 < (int)lo && next_same)
 			return; /* older pending work, if any, stays pending */
@@ -79,7 +87,7 @@ static void pass_walk(motion_t *m, int i, uint8_t lo, q32_t next_v, q32_t next_e
 			q32_t after = q_at(m, (uint8_t)(i + 1))->line_mm;
 			/* traj_reach(after, next_v, a): the next corner's braking
 			 * distance is its line_extra_mm, already formed */
-			q32_t reach = traj_umax_r(after + next_extra, &at);
+			q32_t reach = traj_umax_r(fx_max64(after - slack, 0) + next_extra, &at);
 			if (reach < v)
 				v = reach;
 			q32_t b = c->corner_a_pt2 == at.a
@@ -128,7 +136,7 @@ void motion_backward_pass_from(motion_t *m, uint8_t lo)
 bool motion_plan_idle(motion_t *m)
 {
 	if (m->pass_todo == 0)
-		return false;
+		return motion_plan_next_line(m);
 	limits_changed(m);
 	uint8_t i = m->pass_todo;
 	q32_t next_v = 0, next_extra = 0;

@@ -62,6 +62,18 @@ static inline __attribute__((always_inline)) void pop(motion_t *m)
 	limits_changed(m);
 }
 
+/* The jerk-limited line running, and the one planned ahead (motion.h):
+ * taking the plan made ahead swaps them, with no copy in the tick. */
+static inline traj_ln_t *ln_run(motion_t *m)
+{
+	return &m->lnb[m->ln_i];
+}
+
+static inline traj_ln_t *ln_ahead(motion_t *m)
+{
+	return &m->lnb[m->ln_i ^ 1];
+}
+
 static inline bool twist_zero(const fx_twist_t *t)
 {
 	return t->vx_pt == 0 && t->vy_pt == 0 && t->w_pt == 0;
@@ -85,6 +97,10 @@ bool motion_plan_corner(motion_t *m, uint8_t i);
  * the limits changed, all of them). */
 void motion_backward_pass_from(motion_t *m, uint8_t lo);
 void motion_backward_pass(motion_t *m);
+
+/* motion_path.c: the next cruise line's jerk-limited profile, planned
+ * ahead (true when it planned). */
+bool motion_plan_next_line(motion_t *m);
 
 /* motion_vel.c: the ticks of the velocity modes. */
 void motion_velocity_tick(motion_t *m, fx_twist_t *out); /* jog, joystick */

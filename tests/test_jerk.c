@@ -670,6 +670,94 @@ static void test_waypoint_queued_on_a_planned_line(void **state)
 	assert_int_equal(r.m.ref.y_mm, (q32_t)1000 << 32);
 }
 
+/* A blended cruise route under jerk limits: 1000 mm out, 1000 mm across,
+ * 1000 mm back, 700 mm down (three 90 degree corners, 200 mm blends). The
+ * lines run between the corner speeds on traj_ln's ramps and the corners
+ * hold their speed: along the path no tick changes speed by more than the
+ * set acceleration or its change by more than the set jerk (a corner's
+ * rotation is its clothoid's), the unit never stands still before the end,
+ * and it lands on the last waypoint to the raw unit. Planned ahead between
+ * ticks (motion_plan_idle, as the board and the Linux loop do) or in the
+ * tick, the ticks are the same. */
+static const q32_t route[4][2] = {{1000, 0}, {1000, 1000}, {0, 1000}, {0, 300}};
+
+static void run_route(jrig_t *r, bool ahead, q32_t *trace, int *n, int cap)
+{
+	jrig_init(r, MOTION_KIN_DIFF);
+	if (!trace) /* the acceleration-limited route, for comparison */
+		motion_set_jerk(&r->m, 0, 0);
+	for (int i = 0; i < 4; i++)
+		assert_true(motion_cruise_abs(&r->m, route[i][0] << 32, route[i][1] << 32));
+	*n = 0;
+	while (motion_has_work(&r->m) && *n < cap) {
+		jrig_tick(r);
+		if (trace)
+			trace[*n] = r->u1[0];
+		(*n)++;
+		if (ahead)
+			while (motion_plan_idle(&r->m))
+				;
+	}
+	jrig_tick(r);
+}
+
+static void test_cruise_s_curve(void **state)
+{
+	(void)state;
+	static q32_t t1[40000], t2[40000];
+	static jrig_t r;
+	int n1, n2;
+	run_route(&r, false, t1, &n1, 40000);
+	assert_int_equal(r.m.ref.x_mm, 0);
+	assert_int_equal(r.m.ref.y_mm, (q32_t)300 << 32);
+	assert_true(r.amax[0] <= r.m.a_t_pt2);
+	assert_true(r.jmax[0] <= r.m.j_t_pt3);
+	/* It starts facing the first waypoint: no turn, no tick at rest. */
+	int stood = 0;
+	for (int i = 0; i < n1 - 1; i++)
+		stood += t1[i] == 0;
+	assert_int_equal(stood, 0);
+	run_route(&r, true, t2, &n2, 40000);
+	assert_int_equal(n1, n2);
+	for (int i = 0; i < n1; i++)
+		assert_int_equal(t1[i], t2[i]);
+	int n0;
+	run_route(&r, false, NULL, &n0, 40000);
+	printf("cruise under jerk limits: %d ticks (acceleration-limited: %d)\n", n1, n0);
+}
+
+/* A stop in the middle of a held corner of that route brakes from the
+ * corner's speed at the limits, from zero acceleration (the hold's, not
+ * the line's last): its first change of acceleration is the corner's
+ * braking jerk at most; then the next move starts clean. */
+static void test_stop_in_held_corner(void **state)
+{
+	(void)state;
+	static jrig_t r;
+	jrig_init(&r, MOTION_KIN_DIFF);
+	for (int i = 0; i < 4; i++)
+		assert_true(motion_cruise_abs(&r.m, route[i][0] << 32, route[i][1] << 32));
+	int n = 0;
+	while (!(r.m.hold_on && r.m.seg.s > r.m.seg.len / 2) && n++ < 20000)
+		jrig_tick(&r);
+	assert_true(r.m.hold_on);
+	/* The corner's braking jerk: the translation's, or the rotation's
+	 * over its mm per degree, half of it (motion_path.c, piece_limit). */
+	q32_t jb = fx_min64(r.m.jmax_t_pt3, fx_mul(r.m.jmax_r_pt3, r.m.seg.corner.k_mm_deg) / 2);
+	motion_stop(&r.m);
+	jrig_reset_peaks(&r);
+	jrig_tick(&r);
+	assert_true(r.jmax[0] <= jb);
+	jrig_run(&r, 20000);
+	assert_true(r.amax[0] <= r.m.amax_t_pt2);
+	assert_true(r.jmax[0] <= r.m.jmax_t_pt3);
+	assert_true(motion_forward(&r.m, (q32_t)100 << 32));
+	jrig_reset_peaks(&r);
+	jrig_run(&r, 20000);
+	assert_true(r.amax[0] <= r.m.a_t_pt2);
+	assert_true(r.jmax[0] <= r.m.j_t_pt3);
+}
+
 /* What $jerk and the configuration take: 0, or at least 64 raw units a
  * tick^3 at the tick rate, at most VS_JERK_MAX and the limit; never a
  * number that is not finite. */
@@ -713,6 +801,8 @@ int main(void)
 	    cmocka_unit_test(test_waypoint_queued_on_a_planned_line),
 	    cmocka_unit_test(test_new_speed_while_accelerating),
 	    cmocka_unit_test(test_new_speed_glides),
+	    cmocka_unit_test(test_cruise_s_curve),
+	    cmocka_unit_test(test_stop_in_held_corner),
 	    cmocka_unit_test(test_jog_retarget_while_accelerating),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);

@@ -130,6 +130,10 @@ static void tick(app_t *a, bool serve)
 	if (busy_us > a->st.busy_max_us)
 		a->st.busy_max_us = busy_us;
 	vehicle_tick_busy(&a->v, busy_us);
+	/* Between two ticks, as the board's idle loop: the next cruise line's
+	 * jerk-limited profile, so that its first tick need not plan it. */
+	while (vehicle_plan_idle(&a->v))
+		;
 }
 
 static bool unit_moving(app_t *a)

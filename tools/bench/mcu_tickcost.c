@@ -54,6 +54,14 @@ static bool retarget(rig_t *r, vs_position_t p, const char *label)
 	return ok;
 }
 
+static bool plan(rig_t *r, const char *label)
+{
+	uint32_t t0 = systick_cycles();
+	bool did = vehicle_plan_idle(&r->v);
+	add(label, systick_cycles() - t0);
+	return did;
+}
+
 /* newlib's output: blocking, straight to the UART. */
 int _write(int fd, const char *buf, int n);
 int _write(int fd, const char *buf, int n)
@@ -84,9 +92,10 @@ __attribute__((used)) void _exit(int code)
 
 int main(void)
 {
-	static const bench_hooks_t hooks = {tick, retarget};
-	static const char *const names[] = {"idle",	"line",	     "cruise",	 "jog",
-					    "retarget", "line_jerk", "jog_jerk", "speed_jerk"};
+	static const bench_hooks_t hooks = {tick, retarget, plan};
+	static const char *const names[] = {"idle",	"line",	       "cruise",
+					    "jog",	"retarget",    "line_jerk",
+					    "jog_jerk", "cruise_jerk", "speed_jerk"};
 
 	uart_init();
 	systick_init(1000u);

@@ -35,13 +35,21 @@ long bench_scenario(rig_t *r, const char *sc, const bench_hooks_t *h)
 		do
 			tick(r, h, "tick");
 		while (motion_has_work(&r->v.motion));
-	} else if (strcmp(sc, "cruise") == 0) {
+	} else if (strcmp(sc, "cruise") == 0 || strcmp(sc, "cruise_jerk") == 0) {
+		bool jerk = sc[6] != 0;
+		if (jerk)
+			need(vehicle_set_jerk(&r->v, 2000.0, 1000.0), "$jerk");
 		for (int i = 0; i < ROUTE_N; i++)
 			need(vs_moveCruiseAbs(&r->v, (vs_point_t){route_mm[i][0], route_mm[i][1]}),
 			     "moveCruiseAbs");
-		do
+		if (jerk) /* the main loop plans between the requests and the next tick */
+			while (h->plan(r, "plan-ahead"))
+				;
+		do {
 			tick(r, h, "tick");
-		while (motion_has_work(&r->v.motion));
+			if (jerk)
+				h->plan(r, "plan-ahead");
+		} while (motion_has_work(&r->v.motion));
 	} else if (strcmp(sc, "jog") == 0 || strcmp(sc, "jog_jerk") == 0) {
 		if (sc[3])
 			need(vehicle_set_jerk(&r->v, 2000.0, 1000.0), "$jerk");

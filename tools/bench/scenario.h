@@ -9,6 +9,8 @@
  *   jog       moveJog 300 mm/s, 30 deg/s, re-sent every 100 ms: 3000 ticks
  *   retarget  moveContinuousRel while moving, 20 times: the call and the tick after it
  *   line_jerk, jog_jerk   line and jog with $jerk 2000 1000 (mm/s^3, deg/s^3)
+ *   cruise_jerk  cruise with $jerk 2000 1000, the main loop's planning between
+ *             two ticks measured apart ("plan-ahead")
  *   speed_jerk  moveForward 3000 with $jerk 2000 1000; setVelocity 800 at tick
  *             1500 (on the hold), 300 at 2600: every tick, the three after
  *             each new speed apart
@@ -24,9 +26,12 @@ typedef struct {
 	void (*tick)(rig_t *r, const char *label);
 	/* Runs vs_moveContinuousRel(&r->v, p) and measures it as label. */
 	bool (*retarget)(rig_t *r, vs_position_t p, const char *label);
+	/* Runs vehicle_plan_idle(&r->v) (the main loop's work between two
+	 * ticks) and measures it as label. */
+	bool (*plan)(rig_t *r, const char *label);
 } bench_hooks_t;
 
-#define BENCH_SCENARIOS "idle line cruise jog retarget line_jerk jog_jerk speed_jerk"
+#define BENCH_SCENARIOS "idle line cruise jog retarget line_jerk jog_jerk cruise_jerk speed_jerk"
 
 /* Runs one scenario on a rig fresh from rig_init. Returns the measured
  * ticks, or -1 for an unknown name; exits when an operation is refused. */

@@ -2,7 +2,8 @@
  *
  * Run under
  *   valgrind --tool=callgrind --collect-atstart=no \
- *     --toggle-collect=bench_tick --toggle-collect=bench_cmd_retarget ./tickcost SCENARIO
+ *     --toggle-collect=bench_tick --toggle-collect=bench_cmd_retarget \
+ *     --toggle-collect=bench_plan ./tickcost SCENARIO
  * Every measured call (one whole vehicle_tick, or one interface operation)
  * is followed by a callgrind dump labelled "tick", "cmd" or "tick-after-cmd",
  * so tools/bench/tickcost.sh can report the mean and the largest single tick.
@@ -20,6 +21,7 @@ static rig_t rig;
 
 __attribute__((noinline)) void bench_tick(rig_t *r);
 __attribute__((noinline)) bool bench_cmd_retarget(rig_t *r, vs_position_t p);
+__attribute__((noinline)) bool bench_plan(rig_t *r);
 
 /* The measured functions: nothing but the call itself. The plant steps
  * after the measured tick (loop_hal.h). */
@@ -31,6 +33,11 @@ __attribute__((noinline)) void bench_tick(rig_t *r)
 __attribute__((noinline)) bool bench_cmd_retarget(rig_t *r, vs_position_t p)
 {
 	return vs_moveContinuousRel(&r->v, p);
+}
+
+__attribute__((noinline)) bool bench_plan(rig_t *r)
+{
+	return vehicle_plan_idle(&r->v);
 }
 
 static bool dump_each = true; /* BENCH_NODUMP=1: one total for the whole run */
@@ -54,9 +61,16 @@ static bool retarget_dump(rig_t *r, vs_position_t p, const char *label)
 	return ok;
 }
 
+static bool plan_dump(rig_t *r, const char *label)
+{
+	bool did = bench_plan(r);
+	dump(label);
+	return did;
+}
+
 int main(int argc, char **argv)
 {
-	static const bench_hooks_t hooks = {tick_dump, retarget_dump};
+	static const bench_hooks_t hooks = {tick_dump, retarget_dump, plan_dump};
 	const char *sc = argc > 1 ? argv[1] : "";
 	const char *nd = getenv("BENCH_NODUMP");
 	dump_each = !(nd && strcmp(nd, "1") == 0);

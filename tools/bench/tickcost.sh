@@ -6,13 +6,13 @@
 #   tools/bench/tickcost.sh BUILD_DIR/bench/tickcost [scenario...]
 set -eu
 prog=$1; shift
-[ $# -gt 0 ] || set -- idle line cruise jog retarget line_jerk jog_jerk speed_jerk
+[ $# -gt 0 ] || set -- idle line cruise jog retarget line_jerk jog_jerk cruise_jerk speed_jerk
 command -v valgrind >/dev/null || { echo "tickcost: valgrind not installed (tools/deps.sh)"; exit 1; }
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT INT TERM
-cg="valgrind --tool=callgrind --collect-atstart=no --toggle-collect=bench_tick --toggle-collect=bench_cmd_retarget"
+cg="valgrind --tool=callgrind --collect-atstart=no --toggle-collect=bench_tick --toggle-collect=bench_cmd_retarget --toggle-collect=bench_plan"
 for sc in "$@"; do
-	rm -f "$tmp"/cg.*
+	find "$tmp" -name "cg.*" -delete
 	$cg --callgrind-out-file="$tmp/cg.out" "$prog" "$sc" >"$tmp/log" 2>&1 || { cat "$tmp/log"; exit 1; }
 	# Each dump: "desc: Trigger: Client Request: LABEL" and "summary: IR".
 	find "$tmp" -name 'cg.out.*' -exec awk '
@@ -29,8 +29,8 @@ for sc in "$@"; do
 			}
 		}' "$tmp/costs" | sort
 done
-if [ "$*" = "idle line cruise jog retarget line_jerk jog_jerk speed_jerk" ] || [ "${BENCH_SPLIT:-0}" = 1 ]; then
-	rm -f "$tmp"/cg.*
+if [ "$*" = "idle line cruise jog retarget line_jerk jog_jerk cruise_jerk speed_jerk" ] || [ "${BENCH_SPLIT:-0}" = 1 ]; then
+	find "$tmp" -name "cg.*" -delete
 	BENCH_NODUMP=1 $cg --callgrind-out-file="$tmp/cg.out" "$prog" cruise >"$tmp/log" 2>&1
 	echo "  split of the cruise ticks (inclusive instructions per tick, callees counted in callers):"
 	n=$(sed -n 's/^cruise: \([0-9]*\) measured.*/\1/p' "$tmp/log")
