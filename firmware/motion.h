@@ -146,27 +146,22 @@ typedef struct {
 	 * (sc_on below: it runs) and the last tick's change of speed. */
 	traj_sc_t sc;
 	q32_t acc;
-	/* A line between speeds (ln_on: it runs; a cruise line, or after a
-	 * new speed limit the line from the speed reached, planned once the
-	 * acceleration is zero: glide brings it there at the jerk); plan_cap
-	 * is the limit the running profile was planned for. */
+	/* A line between speeds (ln_on below: it runs; a cruise line, or
+	 * after a new speed limit the line from the speed reached, planned
+	 * once the acceleration is zero: glide brings it there at the jerk);
+	 * plan_cap is the limit the running profile was planned for. */
 	traj_ln_t lnb[2]; /* the line running (ln_i) and the one planned ahead */
-	uint8_t ln_i;
 	q32_t plan_cap;
-	bool ln_on, glide;
 	/* Jerk-limited cruise: a piece's profile is chosen on its first tick
-	 * (fresh); a corner entered at speed holds it (hold_on, hold_v); the
-	 * next line's profile is planned ahead (motion_plan_idle) for the
-	 * length, speeds and limits in ln_key. */
-	bool fresh, hold_on;
-	uint8_t ln_next; /* LN_NEXT_*: what ln_key and the line ahead hold */
+	 * (fresh below); a corner entered at speed holds it (hold_on, hold_v);
+	 * the next line's profile is planned ahead (motion_plan_idle) for the
+	 * length, speeds and limits in ln_key (ln_next says what they hold). */
 	q32_t hold_v;
 	q32_t ln_key[6];
 	/* The head cruise waypoint's (face_to) turn to face it from
 	 * face_ref, worked out ahead likewise (face_ok). */
 	fx_pose_t face_ref, face_to;
 	q32_t face_a;
-	bool face_ok;
 
 	/* Jog / joystick velocity target (body frame, per tick), and the last
 	 * tick's change of velocity (the jerk-limited slew's state). */
@@ -177,6 +172,8 @@ typedef struct {
 	bool goal_position_done;
 	bool goal_reverse; /* differential base: backing toward the goal */
 	bool sc_on;	   /* the planned jerk-limited profile runs */
+	bool ln_on, glide, fresh, hold_on, face_ok;
+	uint8_t ln_i, ln_next; /* ln_next: LN_NEXT_* */
 } motion_t;
 
 void motion_init(motion_t *m, const motion_params_t *p);

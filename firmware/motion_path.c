@@ -237,9 +237,9 @@ static stage_t cruise_stage(motion_t *m, motion_cmd_t *c)
 		if (m->v > 0)
 			return STAGE_SKIP; /* arriving out of a corner, already aligned */
 		q32_t a;
-		if (m->face_ok && m->face_ref.x_mm == r->x_mm && m->face_ref.y_mm == r->y_mm &&
-		    m->face_ref.th_deg == r->th_deg && m->face_to.x_mm == c->target.x_mm &&
-		    m->face_to.y_mm == c->target.y_mm)
+		if (ONLINE_JERK && m->face_ok && m->face_ref.x_mm == r->x_mm &&
+		    m->face_ref.y_mm == r->y_mm && m->face_ref.th_deg == r->th_deg &&
+		    m->face_to.x_mm == c->target.x_mm && m->face_to.y_mm == c->target.y_mm)
 			a = m->face_a; /* worked out ahead, from here */
 		else
 			a = cruise_face(c, r);
@@ -581,7 +581,7 @@ static q32_t sc_speed(motion_t *m, bool braking)
 {
 	/* A corner held at its speed, limit unchanged: first, as its ticks
 	 * are a cruise's dearest. */
-	if (m->hold_on && !braking && m->lim_vmax == m->plan_cap) {
+	if (ONLINE_JERK && m->hold_on && !braking && m->lim_vmax == m->plan_cap) {
 		m->acc = m->hold_v - m->v; /* a brake from here starts from it */
 		return m->hold_v;
 	}
@@ -591,17 +591,20 @@ static q32_t sc_speed(motion_t *m, bool braking)
 		m->fresh = false;
 	} else if (m->fresh) {
 		m->fresh = false;
-		if (m->v > 0)
+		if (ONLINE_JERK && m->v > 0)
 			plan_at_speed(m, rem);
+	} else if (!ONLINE_JERK) {
+		if (m->sc_on && m->lim_vmax <= m->sc.vm)
+			plan_drop(m); /* a lower limit: brake, and plan again at rest */
 	} else if ((m->sc_on || m->ln_on || m->hold_on) && m->v > 0 && m->lim_vmax != m->plan_cap) {
 		plan_new_limit(m);
 	}
-	if (m->hold_on) {
+	if (ONLINE_JERK && m->hold_on) {
 		/* The crossing into the next line is path_tick's. */
 		m->acc = m->hold_v - m->v;
 		return m->hold_v;
 	}
-	if (m->glide) {
+	if (ONLINE_JERK && m->glide) {
 		if (m->acc != 0) {
 			/* The acceleration to zero at the jerk: below the
 			 * profile's speeds, so braking still fits. */
@@ -637,7 +640,7 @@ static q32_t sc_speed(motion_t *m, bool braking)
 		/* From rest: to rest on the S-curve, into a corner on the line. */
 		q32_t cout = piece_cout(m);
 		m->plan_cap = m->lim_vmax;
-		if (cout == 0 || !plan_line(m, rem, cout)) {
+		if (!ONLINE_JERK || cout == 0 || !plan_line(m, rem, cout)) {
 			if (!traj_sc_plan(&m->sc, rem, m->lim_vmax, m->lim_a, m->lim_j)) {
 				m->lim_j = 0; /* no room for the rounding margins: as without */
 				return traj_step(m->v, rem, m->lim_vmax, m->lim_a);
@@ -645,7 +648,7 @@ static q32_t sc_speed(motion_t *m, bool braking)
 			m->sc_on = true;
 		}
 	}
-	q32_t u = m->ln_on ? traj_ln_next(ln_run(m)) : traj_sc_next(&m->sc);
+	q32_t u = ONLINE_JERK && m->ln_on ? traj_ln_next(ln_run(m)) : traj_sc_next(&m->sc);
 	m->acc = u - m->v;
 	return u;
 }
@@ -680,7 +683,8 @@ static bool plan_ahead(motion_t *m, q32_t len, q32_t cin, q32_t cout)
  * where a collinear pass's line ends, at that line's last speed. */
 bool motion_plan_next_line(motion_t *m)
 {
-	if (m->mode != MODE_PATH || m->q_count == 0 || m->stopping || m->paused || !m->jerk_any)
+	if (!ONLINE_JERK || m->mode != MODE_PATH || m->q_count == 0 || m->stopping || m->paused ||
+	    !m->jerk_any)
 		return false;
 	const motion_cmd_t *c0 = q_at(m, 0);
 	if (c0->kind != MCMD_CRUISE || !c0->start_known)
@@ -813,7 +817,7 @@ static inline __attribute__((always_inline)) bool piece_finish(motion_t *m)
 		 * waypoint queued since turned into a blend has landed (at the
 		 * speed of its last step, up to a jerk): what follows runs on
 		 * the acceleration-limited profile. */
-		bool on = m->ln_on && ln_run(m)->cout > 0;
+		bool on = ONLINE_JERK && m->ln_on && ln_run(m)->cout > 0;
 		if (on)
 			m->hold_v = ln_run(m)->cout;
 		else
@@ -836,7 +840,7 @@ static inline __attribute__((always_inline)) void piece_begin(motion_t *m)
 	 * unit stops (stop_done, motion_halt). A cruise line runs along its
 	 * heading: its jerk is the translation's. */
 	if (m->jerk_any) {
-		if (m->seg.kind == SEG_LINE && q_at(m, 0)->kind == MCMD_CRUISE)
+		if (ONLINE_JERK && m->seg.kind == SEG_LINE && q_at(m, 0)->kind == MCMD_CRUISE)
 			m->lim_j = m->j_t_pt3;
 		else if (m->v == 0 && !blends_onward(m, m->seg.kind))
 			m->lim_j = piece_jerk(&m->seg, m->j_t_pt3, m->j_r_pt3);

@@ -64,7 +64,7 @@ static void pass_walk(motion_t *m, int i, uint8_t lo, q32_t next_v, q32_t next_e
 	 * up to a step into it (the corner's last): the braking counts on that
 	 * much less of each line. */
 	q32_t slack = 0;
-	if (m->j_t_pt3 > 0)
+	if (ONLINE_JERK && m->j_t_pt3 > 0)
 		slack = vt_eff(m) * (m->a_t_pt2 / m->j_t_pt3 + 4);
 	for (; i >= 0; i--) {
 		if (i + 1 < (int)lo && next_same)

@@ -22,6 +22,17 @@
 
 #include "motion.h"
 
+/* The jerk-limited profiles that start or end at speed (cruise lines
+ * between their corner speeds, the glide to a new speed limit, planning
+ * ahead): a build may leave them out (-DMOTION_NO_ONLINE_JERK, the
+ * Cortex-M images for now: docs/jerk.md); it then runs cruise lines on
+ * the acceleration-limited profile and brakes to rest for a lower limit. */
+#ifdef MOTION_NO_ONLINE_JERK
+#define ONLINE_JERK 0
+#else
+#define ONLINE_JERK 1
+#endif
+
 #define TINY_MM	 ((q32_t)4295) /* 1e-6 mm: below this a line has no length */
 #define TINY_DEG ((q32_t)4295) /* 1e-6 deg */
 

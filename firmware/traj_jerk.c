@@ -207,13 +207,14 @@ static bool ln_fits(traj_ln_t *p, int64_t w, int64_t len, int64_t am, int64_t jm
 	return ln_dist(p, w, 0) <= len;
 }
 
-bool traj_ln_plan(traj_ln_t *p, q32_t len, q32_t cin, q32_t cout, q32_t v, q32_t a, q32_t j)
+/* The line's top speed lo, the fastest that fits with no ticks at it,
+ * and the lowest, wmin, that the search for the remainder may go down to;
+ * the boxes in p planned for them. False when not even the ramp from cin
+ * to cout fits. */
+static bool ln_top(traj_ln_t *p, int64_t len, int64_t vm, int64_t am, int64_t jm, int64_t *lo_p,
+		   int64_t *wmin_p)
 {
-	int64_t vm = v - 1, am = a - 2, jm = j - 5;
-	*p = (traj_ln_t){.cin = cin, .cout = cout};
-	if (len <= 0 || am < 1 || jm < 1 || cin < 0 || cout < 0 || cout > vm)
-		return false;
-	int64_t lo, hi = vm, wmin, w;
+	int64_t cin = p->cin, cout = p->cout, lo, hi = vm, wmin;
 	if (cin > vm) {
 		/* Above the limit (a lowered one): down to it first, and no
 		 * faster. The first ramp's boxes serve down to 1/64 below it,
@@ -224,11 +225,11 @@ bool traj_ln_plan(traj_ln_t *p, q32_t len, q32_t cin, q32_t cout, q32_t v, q32_t
 		if (ln_dist(p, lo, 0) > len)
 			return false;
 	} else {
-		/* The fastest line speed that fits with no ticks at it, to
-		 * 1/256 of it. From max(cin, cout) up the distance grows with
-		 * w; below, the two ramps one way are longer than the one ramp
-		 * that w = cin gives (their times add up to more, the extra A /
-		 * J or sqrt term), so when that does not fit, nothing does. */
+		/* To 1/256 of it. From max(cin, cout) up the distance grows
+		 * with w; below, the two ramps one way are longer than the one
+		 * ramp that w = cin gives (their times add up to more, the
+		 * extra A / J or sqrt term), so when that does not fit, nothing
+		 * does. */
 		lo = wmin = fx_max64(cin, cout);
 		if (ln_fits(p, hi, len, am, jm)) {
 			lo = hi;
@@ -245,7 +246,19 @@ bool traj_ln_plan(traj_ln_t *p, q32_t len, q32_t cin, q32_t cout, q32_t v, q32_t
 		}
 		ln_shapes(p, lo, lo, am, jm);
 	}
-	if (lo < 1)
+	*lo_p = lo;
+	*wmin_p = wmin;
+	return true;
+}
+
+bool traj_ln_plan(traj_ln_t *p, q32_t len, q32_t cin, q32_t cout, q32_t v, q32_t a, q32_t j)
+{
+	int64_t vm = v - 1, am = a - 2, jm = j - 5;
+	*p = (traj_ln_t){.cin = cin, .cout = cout};
+	if (len <= 0 || am < 1 || jm < 1 || cin < 0 || cout < 0 || cout > vm)
+		return false;
+	int64_t lo, wmin, w;
+	if (!ln_top(p, len, vm, am, jm, &lo, &wmin) || lo < 1)
 		return false;
 	/* The ticks at it, and what is left. On the boxes planned for lo
 	 * (they serve every w from max(cin, cout) to lo), D grows with w by

@@ -42,14 +42,14 @@ ifneq ($(filter cortex-m4 cortex-m0,$(TARGET)),)
 
 MCU := $(BUILD)/$(TARGET)
 # A 16-deep motion queue (2 kB of RAM less than the host's 32).
-MCU_DEFS := -DMOTION_QUEUE_LEN=16
+MCU_DEFS := -DMOTION_QUEUE_LEN=16 -DMOTION_NO_ONLINE_JERK
 # Link-time optimisation: inlining and dead-code removal across files saves
 # a tenth of the flash (49.4 KiB -> 44.5 KiB when it was brought in). Fat
 # objects keep their machine code too, which check_nofloat.sh reads.
 MCU_LTO := -flto -ffat-lto-objects
 # One link-time partition: two copied small inline helpers into both.
-MCU_LTO_LINK := -flto-partition=one
-MCU_BASE := -std=c11 -Os -g $(WARN) -I. -MMD -MP $(MCU_CPU_$(TARGET)) -ffunction-sections \
+MCU_LTO_LINK := -flto-partition=one -fno-ipa-cp-clone
+MCU_BASE := -std=c11 -Os -fno-ipa-cp-clone -g $(WARN) -I. -MMD -MP $(MCU_CPU_$(TARGET)) -ffunction-sections \
 	-fdata-sections $(MCU_LTO) $(MCU_DEFS)
 MCU_CFLAGS_firmware := $(MCU_BASE) $(STRICT) -ffreestanding
 # The board is short of flash: it leaves out the help lines ($help NAME gives

@@ -456,10 +456,8 @@ static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_
 	if (np_streq_nocase(cmd, "$config")) {
 #ifdef VS_NO_CONFIG_EXTRA
 		(void)exec_config;
-		return reply_error(c, r,
-				   "%d $config is not in this build (its configuration is "
-				   "compiled in: hal/cortexm/board_main.c)",
-				   CONSOLE_E_EXTRA);
+		/* Its configuration is compiled in (hal/cortexm/board_main.c). */
+		return reply_error(c, r, "%d $config is not in this build", CONSOLE_E_EXTRA);
 #else
 		return exec_config(c, argv, ntok, r);
 #endif
