@@ -563,7 +563,8 @@ static void plan_new_limit(motion_t *m)
 static void plan_at_speed(motion_t *m, q32_t rem)
 {
 	if (m->seg.kind == SEG_CORNER) {
-		m->hold_on = m->hold_v > 0 && m->hold_v <= m->lim_vmax;
+		m->hold_on =
+		    m->hold_v > 0 && m->hold_v <= m->lim_vmax && fx_abs64(m->acc) <= m->lim_j;
 		m->plan_cap = m->lim_vmax;
 		return;
 	}
@@ -611,7 +612,8 @@ static q32_t sc_speed(motion_t *m, bool braking)
 			q32_t a = m->acc > 0 ? fx_max64(m->acc - m->lim_j, 0)
 					     : fx_min64(m->acc + m->lim_j, 0);
 			m->acc = a;
-			return fx_min64(m->v + a, rem);
+			/* Short of a stop, the step may cross into the corner. */
+			return blends_onward(m, m->seg.kind) ? m->v + a : fx_min64(m->v + a, rem);
 		}
 		m->glide = false;
 		plan_line(m, rem, piece_cout(m));
@@ -627,8 +629,9 @@ static q32_t sc_speed(motion_t *m, bool braking)
 			m->acc = v - m->v;
 		}
 		/* The fastest way to rest is never slower than the plan, which
-		 * stops by the end: this only guards the raw unit. */
-		return fx_min64(v, rem);
+		 * stops by the end: this only guards the raw unit. A piece that
+		 * blends into the next brakes on across it. */
+		return blends_onward(m, m->seg.kind) ? v : fx_min64(v, rem);
 	}
 	if (!m->sc_on && !m->ln_on && m->acc != 0) {
 		/* The brake landed last tick (its last change of speed up to
@@ -818,12 +821,16 @@ static inline __attribute__((always_inline)) bool piece_finish(motion_t *m)
 		 * speed of its last step, up to a jerk): what follows runs on
 		 * the acceleration-limited profile. */
 		bool on = ONLINE_JERK && m->ln_on && ln_run(m)->cout > 0;
-		if (on)
-			m->hold_v = ln_run(m)->cout;
-		else
+		/* Into the corner under the jerk limit however the line ended
+		 * (braking, gliding, a plan from rest that became a blend): the
+		 * corner holds the speed it is entered at if that steps no
+		 * acceleration, or brakes (sc_speed, plan_at_speed). */
+		bool corner = ONLINE_JERK && kind == SEG_LINE && m->seg.kind == SEG_CORNER;
+		m->hold_v = on ? ln_run(m)->cout : m->v;
+		if (!on && !corner)
 			m->lim_j = 0;
 		plan_drop(m);
-		m->fresh = on;
+		m->fresh = on || corner;
 	}
 	return true;
 }
