@@ -188,11 +188,15 @@ static void check_jerk(const vehicle_t *v, const fx_twist_t *t)
 	double jr = (double)fx_max64(m->j_r_pt3, m->jmax_r_pt3) + 16;
 	/* A cruise corner's rotation is its clothoid's (the issue leaves it
 	 * so): its rate's slope steps where the corner begins, turns and
-	 * ends. The ticks of a corner and the two after it are exempt on the
-	 * rotation axis alone. */
-	corner_recent = motion_mode(m) == MODE_PATH && m->seg.kind == SEG_CORNER ? 3
-			: corner_recent						 ? corner_recent - 1
-										 : 0;
+	 * ends. On the differential base a line turns only where a corner
+	 * shorter than a step is crossed within the tick, so the ticks of a
+	 * line or a corner and the two after them are exempt on the rotation
+	 * axis alone (turns and arcs are not). */
+	corner_recent =
+	    motion_mode(m) == MODE_PATH && (m->seg.kind == SEG_CORNER || m->seg.kind == SEG_LINE)
+		? 3
+	    : corner_recent ? corner_recent - 1
+			    : 0;
 	if (corner_recent)
 		jr = INFINITY;
 	if (applies && jerk_run >= 2 &&
