@@ -822,10 +822,12 @@ static inline __attribute__((always_inline)) bool piece_finish(motion_t *m)
 		 * the acceleration-limited profile. */
 		bool on = ONLINE_JERK && m->ln_on && ln_run(m)->cout > 0;
 		/* Into the corner under the jerk limit however the line ended
-		 * (braking, gliding, a plan from rest that became a blend): the
+		 * (braking, gliding; not a plan from rest that became a blend,
+		 * which lands at its last step's speed): the
 		 * corner holds the speed it is entered at if that steps no
 		 * acceleration, or brakes (sc_speed, plan_at_speed). */
-		bool corner = ONLINE_JERK && kind == SEG_LINE && m->seg.kind == SEG_CORNER;
+		bool corner =
+		    ONLINE_JERK && kind == SEG_LINE && m->seg.kind == SEG_CORNER && !m->sc_on;
 		m->hold_v = on ? ln_run(m)->cout : m->v;
 		if (!on && !corner)
 			m->lim_j = 0;
