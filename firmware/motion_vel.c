@@ -282,7 +282,6 @@ void motion_continuous_tick(motion_t *m, fx_twist_t *out)
 	slew_rates(m, braking, &at, &ar);
 	if (braking)
 		want = (fx_twist_t){0};
-	q32_t prev_vx = m->vel.vx_pt;
 	fx_twist_t v0 = m->vel;
 	slew2(&m->vel.vx_pt, &m->vel.vy_pt, want.vx_pt, want.vy_pt, at);
 	m->vel.w_pt = slew(m->vel.w_pt, want.w_pt, ar);
@@ -290,7 +289,7 @@ void motion_continuous_tick(motion_t *m, fx_twist_t *out)
 	 * (backing up, the same with the signs turned). */
 	q32_t dir = m->goal_reverse ? -1 : 1;
 	if (!m->goal_position_done && dir * m->vel.vx_pt > dist && m->p.kin == MOTION_KIN_DIFF)
-		m->vel.vx_pt = dir * fx_max64(dist, dir * prev_vx - at);
+		m->vel.vx_pt = dir * fx_max64(dist, dir * v0.vx_pt - at);
 	/* The change of velocity, which a jog that takes over slews on
 	 * from. */
 	m->vacc.vx_pt = m->vel.vx_pt - v0.vx_pt;
