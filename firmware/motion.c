@@ -60,6 +60,10 @@ void motion_set_jerk(motion_t *m, q32_t jt, q32_t jr)
 	m->j_r_pt3 = jr / hz / hz / hz;
 	m->jerk_any = (m->j_t_pt3 | m->j_r_pt3 | m->jmax_t_pt3 | m->jmax_r_pt3) != 0;
 	limits_changed(m);
+	/* A continuous goal under way takes up the jerk-limited law from its
+	 * speed and acceleration (motion_seek.c). */
+	if (ONLINE_JERK && m->mode == MODE_CONTINUOUS)
+		motion_seek_retarget(m);
 }
 
 void motion_set_jog_timeout_ms(motion_t *m, uint32_t ms)
@@ -176,6 +180,8 @@ void motion_halt(motion_t *m)
 	m->vel = (fx_twist_t){0};
 	m->vacc = (fx_twist_t){0};
 	m->vtarget = (fx_twist_t){0};
+	m->sk_on[0] = m->sk_on[1] = false;
+	m->sk_v[0] = m->sk_v[1] = m->sk_a[0] = m->sk_a[1] = 0;
 	m->stopping = false;
 	m->paused = false;
 	m->rest_tick = false;

@@ -171,6 +171,14 @@ typedef struct {
 	fx_pose_t goal;
 	bool goal_position_done;
 	bool goal_reverse; /* differential base: backing toward the goal */
+	/* The continuous goal under jerk limits (motion_seek.c): the mecanum
+	 * axes' speeds, last changes and (Q30) direction; per axis the tail
+	 * to rest running (sk_on, in lnb[i]), the cap it was planned under
+	 * and the direction it runs in. */
+	q32_t sk_v[2], sk_a[2], sk_cap[2];
+	int32_t sk_c, sk_s;
+	int8_t sk_sg[2];
+	bool sk_on[2];
 	bool sc_on;	   /* the planned jerk-limited profile runs */
 	bool ln_on, glide, fresh, hold_on, face_ok;
 	uint8_t ln_i, ln_next; /* ln_next: LN_NEXT_* */

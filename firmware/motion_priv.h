@@ -6,6 +6,7 @@
  *   motion_path.c   motion_tick (the mode dispatch), the path mode's tick
  *                   and its pieces
  *   motion_vel.c    jog, joystick and continuous modes: commands and ticks
+ *   motion_seek.c   the continuous goal under jerk limits
  *   motion_plan.c   cruise lines, corner planning and the backward pass
  *   motion_geom.c   geometry the commands and the pieces share
  * and below them all the helpers here, inline wherever they are used.
@@ -89,6 +90,11 @@ static inline bool twist_zero(const fx_twist_t *t)
 {
 	return t->vx_pt == 0 && t->vy_pt == 0 && t->w_pt == 0;
 }
+
+/* motion_seek.c: the continuous goal's tick under jerk limits, and its
+ * retarget (a new goal). */
+void motion_seek_tick(motion_t *m, fx_twist_t *out);
+void motion_seek_retarget(motion_t *m);
 
 /* motion_geom.c */
 /* Rotate a body-frame vector into the world frame at heading th. */

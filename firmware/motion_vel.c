@@ -4,6 +4,12 @@
 
 #include <stddef.h>
 
+/* The continuous goal honours the jerk settings (motion_seek.c). */
+static inline bool seek_jerk(const motion_t *m)
+{
+	return (m->j_t_pt3 | m->j_r_pt3) != 0;
+}
+
 static bool velocity_mode_allowed(const motion_t *m)
 {
 	return m->mode == MODE_IDLE || m->mode == MODE_JOG || m->mode == MODE_CONTINUOUS;
@@ -34,6 +40,8 @@ bool motion_continuous_rel(motion_t *m, const fx_pose_t *rel)
 	if (m->mode != MODE_CONTINUOUS)
 		m->goal_reverse = false;
 	m->mode = MODE_CONTINUOUS;
+	if (ONLINE_JERK && seek_jerk(m))
+		motion_seek_retarget(m);
 	return true;
 }
 
@@ -270,6 +278,10 @@ void motion_continuous_tick(motion_t *m, fx_twist_t *out)
 {
 	if (rest_first(m, out))
 		return;
+	if (ONLINE_JERK && seek_jerk(m)) {
+		motion_seek_tick(m, out);
+		return;
+	}
 	bool braking = m->stopping || m->paused;
 	fx_twist_t want = {0};
 	q32_t dx = m->goal.x_mm - m->ref.x_mm, dy = m->goal.y_mm - m->ref.y_mm;

@@ -1,0 +1,292 @@
+/* Motion engine: the continuous goal (moveContinuousRel) under jerk limits.
+ *
+ * Each axis approaches its point on its own law, one tick at a time:
+ * toward the speed cap at the set acceleration and jerk (traj_jslew,
+ * traj.h section 5) for as long as a stop from the state that step leaves
+ * still fits in what remains (stop_room, an upper bound); once it would
+ * not, the acceleration goes to zero at the jerk and a line to rest over
+ * exactly what remains is planned (traj_ln, section 6: the tail), which
+ * lands on the point to the raw unit. A retarget drops the tails and the
+ * law goes on from the speed and acceleration the unit has: nothing steps.
+ * An axis moving away from its point comes to rest at the jerk first.
+ *
+ * Differential base: the translation axis runs along the heading toward
+ * the goal's projection on it (forward or backing, goal_reverse), while
+ * the rotation turns toward the goal's bearing on the jerk-limited slew;
+ * once there, the goal heading is the rotation axis's point. Mecanum
+ * base: the axes are the bearing of the goal and its normal as seen at
+ * the retarget; from rest the normal axis has nothing to do and the path
+ * is the straight line, after a retarget with motion across the new line
+ * that motion comes back to the line. Each axis gets 1 / sqrt(2) of the
+ * acceleration and jerk, as in jog, so that the vector never exceeds
+ * them. */
+#include "motion_priv.h"
+
+#include <stddef.h>
+
+/* Within this of the goal when the translation has come to rest, the
+ * reference takes the goal exactly (the Q30 trigonometry that turns the
+ * axes' steps into the body twist and the pose rounds by far less). */
+#define LAND_MM ((q32_t)429497) /* 1e-4 mm */
+/* Closer than this, a differential base stops turning toward the
+ * bearing (which swings as the goal comes near) and runs the rest
+ * straight. */
+#define NEAR_MM ((q32_t)5 << 32)
+
+/* 2^30 / sqrt(2), rounded down (motion_vel.c's share, for the limits). */
+static q32_t half2(q32_t x)
+{
+	const int64_t k = 759250124, lo = x & ((1 << 30) - 1);
+	return (x >> 30) * k + ((lo * k) >> 30);
+}
+
+/* A jerk of 0 (unlimited on that axis): one that lets the acceleration
+ * swing from -a to a in a tick, the acceleration-limited law. */
+static q32_t jerk_or(q32_t j, q32_t a)
+{
+	return j > 0 ? j : 2 * a + 8;
+}
+
+/* An upper bound on the distance a stop from speed v >= 0 and change
+ * acc >= 0 takes at a and j, with the room its tail needs: the
+ * acceleration to zero at j (g ticks, the speed rising to at most vg),
+ * then a ramp to rest, which takes at most vg / a + a / j + 2 whole ticks
+ * (the bound of the ramp that reaches a; by the mean of 2 sqrt(vg / j) and
+ * it, also of the one that does not) at a mean speed of at most vg / 2;
+ * and, as the tail starts at a speed it cannot rise above (at the cap), a
+ * hold at vg long enough for the dip that takes up what is left over (a
+ * rest-to-rest S-curve of less than a tick's distance: at most 4 a / j +
+ * 2 sqrt(vg / a) + 2 ticks, traj.h section 6), with a few ticks' rounding.
+ * Saturates. */
+static q32_t stop_room(q32_t v, q32_t acc, q32_t a, q32_t j)
+{
+	int64_t g = (acc + j - 1) / j, vg, t, r1, r2;
+	if (__builtin_mul_overflow(acc, g + 1, &vg) || __builtin_add_overflow(v, vg / 2, &vg))
+		return INT64_MAX;
+	int64_t aj = a / j;
+	t = vg / a + aj + 4;
+	int64_t hold = g + 5 * aj + 2 * (int64_t)fx_isqrt64((uint64_t)(vg / a)) + 12;
+	if (__builtin_mul_overflow(hold, vg, &r1) || __builtin_mul_overflow(vg, t, &r2) ||
+	    __builtin_add_overflow(r1, r2 / 2, &r1))
+		return INT64_MAX;
+	return r1;
+}
+
+/* One tick of axis i (tail in lnb[i]) toward a point d away (signed):
+ * *v its speed, *acc its last change; cap vc, the set a and j. plan: this
+ * tick may plan a tail (one a tick, to bound its cost). Returns whether it
+ * planned. */
+static bool seek_axis(motion_t *m, int i, q32_t *v, q32_t *acc, q32_t d, q32_t vc, q32_t a,
+		      q32_t j, bool plan)
+{
+	traj_ln_t *ln = &m->lnb[i];
+	q32_t v0 = *v;
+	if (m->sk_on[i]) {
+		/* To its end (its last tick, at rest, included) unless the cap
+		 * changed under it: then the law goes on from here. */
+		bool last = ln->k >= ln->n;
+		if (last || m->sk_cap[i] == vc) {
+			*v = m->sk_sg[i] * traj_ln_next(ln);
+			*acc = *v - v0;
+			m->sk_on[i] = !last;
+			return false;
+		}
+		m->sk_on[i] = false;
+	}
+	q32_t sg = d > 0 || (d == 0 && v0 >= 0) ? 1 : -1;
+	q32_t dd = sg * d, u = sg * v0, au = sg * *acc;
+	bool planned = false;
+	if (u < 0) {
+		traj_jslew(&u, &au, 0, a, j); /* away from the point: to rest */
+	} else {
+		q32_t u1 = u, a1 = au;
+		traj_jslew(&u1, &a1, vc, a, j);
+		if (dd - u1 >= stop_room(u1, fx_max64(a1, 0), a, j)) {
+			u = u1;
+			au = a1;
+		} else if (au != 0) {
+			/* The acceleration to zero at the jerk, then the tail. */
+			au = au > 0 ? fx_max64(au - j, 0) : fx_min64(au + j, 0);
+			u += au;
+		} else if (dd == 0 && u == 0) {
+			/* on the point */
+		} else if (plan && traj_ln_plan(ln, dd, u, 0, fx_max64(vc, 2), a, j)) {
+			m->sk_on[i] = true;
+			m->sk_sg[i] = (int8_t)sg;
+			m->sk_cap[i] = vc;
+			planned = true;
+			q32_t n = traj_ln_next(ln);
+			au = n - u;
+			u = n;
+		} else if (plan) {
+			/* Too near to stop on it (a retarget inside the stopping
+			 * distance): to rest at the jerk, and back. */
+			traj_jslew(&u, &au, 0, a, j);
+		}
+	}
+	*v = sg * u;
+	*acc = sg * au;
+	return planned;
+}
+
+/* Braking (pause, stop): each axis to rest at the limits, reached at the
+ * jerk limits; the tails are dropped. */
+static void seek_brake(motion_t *m, fx_twist_t *vel, fx_twist_t *acc)
+{
+	q32_t at = m->amax_t_pt2, jt = jerk_or(m->jmax_t_pt3, at);
+	q32_t ar = m->amax_r_pt2, jr = jerk_or(m->jmax_r_pt3, ar);
+	m->sk_on[0] = m->sk_on[1] = false;
+	if (m->p.kin == MOTION_KIN_OMNI) {
+		at = half2(at);
+		jt = half2(jt);
+		for (int i = 0; i < 2; i++)
+			traj_jslew(&m->sk_v[i], &m->sk_a[i], 0, at, jt);
+	} else {
+		traj_jslew(&vel->vx_pt, &acc->vx_pt, 0, at, jt);
+	}
+	traj_jslew(&vel->w_pt, &acc->w_pt, 0, ar, jr);
+}
+
+/* Differential base, toward the goal's position dist away, bearing error e
+ * (the direction chosen as the acceleration-limited law chooses it). */
+static void seek_diff(motion_t *m, q32_t e, q32_t dist, fx_twist_t *vel, fx_twist_t *acc)
+{
+	q32_t ae = fx_abs64(e);
+	bool rev = m->goal_reverse;
+	if (!m->goal_reverse && ae > fx_from_int(100))
+		m->goal_reverse = true;
+	else if (m->goal_reverse && ae < fx_from_int(80))
+		m->goal_reverse = false;
+	if (rev != m->goal_reverse)
+		m->sk_on[0] = false; /* the tail ran the other way */
+	if (m->goal_reverse) {
+		e = fx_wrap_deg(e + fx_from_int(180));
+		ae = fx_abs64(e);
+	}
+	q32_t dir = m->goal_reverse ? -1 : 1;
+	/* Along the heading to the goal's projection on it; off by more than
+	 * 45 degrees, no translation: to rest while the turn comes round. */
+	q32_t proj = fx_mul_q30(dist, fx_cos_bam(fx_deg_to_bam(e)));
+	q32_t u = dir * vel->vx_pt, au = dir * acc->vx_pt;
+	q32_t jt = jerk_or(m->j_t_pt3, m->a_t_pt2), jr = jerk_or(m->j_r_pt3, m->a_r_pt2);
+	bool planned = false;
+	if (ae < fx_from_int(45) || m->sk_on[0])
+		planned = seek_axis(m, 0, &u, &au, proj, vt_eff(m), m->a_t_pt2, jt, true);
+	else
+		traj_jslew(&u, &au, 0, m->a_t_pt2, jt);
+	vel->vx_pt = dir * u;
+	acc->vx_pt = dir * au;
+	/* The bearing is the rotation's point while the goal is not near. */
+	if (dist < NEAR_MM) {
+		m->sk_on[1] = false;
+		traj_jslew(&vel->w_pt, &acc->w_pt, 0, m->a_r_pt2, jr);
+	} else {
+		seek_axis(m, 1, &vel->w_pt, &acc->w_pt, e, m->v_r_pt, m->a_r_pt2, jr, !planned);
+	}
+}
+
+/* Mecanum base: the goal dx, dy away in the body frame, on the axes of the
+ * bearing seen at the last retarget. */
+static void seek_omni(motion_t *m, q32_t dx, q32_t dy, fx_twist_t *vel, fx_twist_t *acc)
+{
+	int32_t c = m->sk_c, s = m->sk_s;
+	q32_t du = fx_mul_q30(dx, c) + fx_mul_q30(dy, s);
+	q32_t dn = fx_mul_q30(dy, c) - fx_mul_q30(dx, s);
+	q32_t a = half2(m->a_t_pt2), j = half2(jerk_or(m->j_t_pt3, m->a_t_pt2)), vc = vt_eff(m);
+	/* Across the line as well (the retarget left motion across it, or
+	 * the pose moved off it): each axis within 1 / sqrt(2) of the speed
+	 * too. Less than the landing's tolerance off it is not motion. */
+	bool across = m->sk_v[1] | m->sk_a[1] | m->sk_on[1] || dn >= LAND_MM || dn <= -LAND_MM;
+	if (across)
+		vc = half2(vc);
+	bool planned = seek_axis(m, 0, &m->sk_v[0], &m->sk_a[0], du, vc, a, j, true);
+	if (across)
+		seek_axis(m, 1, &m->sk_v[1], &m->sk_a[1], dn, vc, a, j, !planned);
+	vel->vx_pt = fx_mul_q30(m->sk_v[0], c) - fx_mul_q30(m->sk_v[1], s);
+	vel->vy_pt = fx_mul_q30(m->sk_v[0], s) + fx_mul_q30(m->sk_v[1], c);
+	acc->vx_pt = acc->vy_pt = 0; /* set by the caller from the twist */
+	traj_jslew(&vel->w_pt, &acc->w_pt, 0, m->a_r_pt2, jerk_or(m->j_r_pt3, m->a_r_pt2));
+}
+
+/* A new goal: the tails are dropped; a mecanum base takes the goal's
+ * bearing as its axes and its velocity and acceleration onto them. */
+void motion_seek_retarget(motion_t *m)
+{
+	m->sk_on[0] = m->sk_on[1] = false;
+	m->ln_next = LN_NEXT_NONE; /* the line buffers serve the tails now */
+	if (m->p.kin != MOTION_KIN_OMNI)
+		return;
+	q32_t wx = m->goal.x_mm - m->ref.x_mm, wy = m->goal.y_mm - m->ref.y_mm, dx, dy;
+	motion_body_to_world(-m->ref.th_deg, wx, wy, &dx, &dy);
+	int32_t c, s;
+	if (motion_unit_dir(dx, dy, &c, &s) == 0) {
+		c = 1 << 30;
+		s = 0;
+	}
+	m->sk_c = c;
+	m->sk_s = s;
+	const fx_twist_t *v = &m->vel, *a = &m->vacc;
+	m->sk_v[0] = fx_mul_q30(v->vx_pt, c) + fx_mul_q30(v->vy_pt, s);
+	m->sk_v[1] = fx_mul_q30(v->vy_pt, c) - fx_mul_q30(v->vx_pt, s);
+	m->sk_a[0] = fx_mul_q30(a->vx_pt, c) + fx_mul_q30(a->vy_pt, s);
+	m->sk_a[1] = fx_mul_q30(a->vy_pt, c) - fx_mul_q30(a->vx_pt, s);
+}
+
+/* The goal heading once the position is reached: the rotation axis's
+ * point (its tail in lnb[1]); true when it is on it. */
+static bool seek_heading(motion_t *m, fx_twist_t *vel, fx_twist_t *acc)
+{
+	q32_t e = fx_wrap_deg(m->goal.th_deg - m->ref.th_deg);
+	seek_axis(m, 1, &vel->w_pt, &acc->w_pt, e, m->v_r_pt, m->a_r_pt2, jerk_or(m->j_r_pt3, m->a_r_pt2), true);
+	return !m->sk_on[1] && vel->w_pt == 0 && acc->w_pt == 0 && fx_abs64(e) < TINY_DEG;
+}
+
+void motion_seek_tick(motion_t *m, fx_twist_t *out)
+{
+	bool braking = m->stopping || m->paused;
+	fx_twist_t vel = m->vel, acc = m->vacc;
+	q32_t wx = m->goal.x_mm - m->ref.x_mm, wy = m->goal.y_mm - m->ref.y_mm;
+	q32_t dist = fx_hypot(wx, wy);
+	bool omni = m->p.kin == MOTION_KIN_OMNI;
+	if (braking) {
+		seek_brake(m, &vel, &acc);
+	} else if (m->goal_position_done) {
+		vel.vx_pt = vel.vy_pt = acc.vx_pt = acc.vy_pt = 0;
+		m->sk_v[0] = m->sk_v[1] = m->sk_a[0] = m->sk_a[1] = 0;
+		if (seek_heading(m, &vel, &acc)) {
+			m->ref.th_deg = m->goal.th_deg;
+			m->mode = MODE_IDLE;
+		}
+	} else if (omni) {
+		q32_t dx, dy;
+		motion_body_to_world(-m->ref.th_deg, wx, wy, &dx, &dy);
+		seek_omni(m, dx, dy, &vel, &acc);
+	} else {
+		q32_t e = fx_wrap_deg(fx_atan2_deg(wy, wx) - m->ref.th_deg);
+		seek_diff(m, e, dist, &vel, &acc);
+	}
+	if (omni && braking) {
+		int32_t c = m->sk_c, s = m->sk_s;
+		vel.vx_pt = fx_mul_q30(m->sk_v[0], c) - fx_mul_q30(m->sk_v[1], s);
+		vel.vy_pt = fx_mul_q30(m->sk_v[0], s) + fx_mul_q30(m->sk_v[1], c);
+	}
+	if (omni) {
+		acc.vx_pt = vel.vx_pt - m->vel.vx_pt;
+		acc.vy_pt = vel.vy_pt - m->vel.vy_pt;
+	}
+	m->vel = vel;
+	m->vacc = acc;
+	*out = vel;
+	odom_integrate(&m->ref, out, NULL);
+	bool still = vel.vx_pt == 0 && vel.vy_pt == 0 && !m->sk_on[0] && !m->sk_on[1];
+	if (!m->goal_position_done && !braking && still && acc.vx_pt == 0 && acc.vy_pt == 0 &&
+	    fx_hypot(m->goal.x_mm - m->ref.x_mm, m->goal.y_mm - m->ref.y_mm) < LAND_MM) {
+		m->ref.x_mm = m->goal.x_mm;
+		m->ref.y_mm = m->goal.y_mm;
+		m->goal_position_done = true;
+	}
+	if (braking && twist_zero(&m->vel) && m->stopping) {
+		m->stopping = false;
+		m->mode = MODE_IDLE;
+	}
+}
