@@ -176,10 +176,11 @@ typedef struct {
 	 * to rest running (sk_on, in lnb[i]), the cap it was planned under
 	 * and the direction it runs in. */
 	q32_t sk_v[2], sk_a[2], sk_cap[2];
+	int64_t sk_dip[2]; /* the dips' bound in ticks: translation, rotation */
 	int32_t sk_c, sk_s;
 	int8_t sk_sg[2];
-	bool sk_on[2];
-	bool sc_on;	   /* the planned jerk-limited profile runs */
+	bool sk_on[2], sk_rest[2]; /* sk_rest: the tail is an S-curve from rest */
+	bool sc_on;		   /* the planned jerk-limited profile runs */
 	bool ln_on, glide, fresh, hold_on, face_ok;
 	uint8_t ln_i, ln_next; /* ln_next: LN_NEXT_* */
 } motion_t;

@@ -25,13 +25,18 @@
 #include <stddef.h>
 
 /* Within this of the goal when the translation has come to rest, the
- * reference takes the goal exactly (the Q30 trigonometry that turns the
- * axes' steps into the body twist and the pose rounds by far less). */
-#define LAND_MM ((q32_t)429497) /* 1e-4 mm */
-/* Closer than this, a differential base stops turning toward the
- * bearing (which swings as the goal comes near) and runs the rest
- * straight. */
-#define NEAR_MM ((q32_t)5 << 32)
+ * reference takes the goal exactly. A mecanum base reaches it but for the
+ * Q30 trigonometry that turns its axes' steps into the body twist and the
+ * pose (far less). A differential base reaches the goal's projection on
+ * its heading, and the turn toward the bearing, which swings as the goal
+ * comes near, leaves some microns across (below 10 in the tests; the
+ * default wheel's encoder count is 29): within 10 the reference takes
+ * the goal; beyond, the unit faces it exactly and goes the rest straight. */
+#define LAND_MM	     ((q32_t)429497)   /* 1e-4 mm */
+#define LAND_DIFF_MM ((q32_t)42949673) /* 0.01 mm */
+/* Closer than this, a differential base stops turning toward the bearing
+ * while its translation runs. */
+#define NEAR_MM ((q32_t)1 << 32)
 
 /* 2^30 / sqrt(2), rounded down (motion_vel.c's share, for the limits). */
 static q32_t half2(q32_t x)
@@ -47,52 +52,82 @@ static q32_t jerk_or(q32_t j, q32_t a)
 	return j > 0 ? j : 2 * a + 8;
 }
 
+/* An axis's limits: speed cap, the set acceleration and jerk, and the
+ * hold its tail may need (stop_room). */
+typedef struct {
+	q32_t vc, a, j;
+	int64_t dip;
+} seek_lim_t;
+
 /* An upper bound on the distance a stop from speed v >= 0 and change
- * acc >= 0 takes at a and j, with the room its tail needs: the
+ * acc >= 0 takes at the limits in l, with the room its tail needs: the
  * acceleration to zero at j (g ticks, the speed rising to at most vg),
  * then a ramp to rest, which takes at most vg / a + a / j + 2 whole ticks
  * (the bound of the ramp that reaches a; by the mean of 2 sqrt(vg / j) and
  * it, also of the one that does not) at a mean speed of at most vg / 2;
- * and, as the tail starts at a speed it cannot rise above (at the cap), a
- * hold at vg long enough for the dip that takes up what is left over (a
- * rest-to-rest S-curve of less than a tick's distance: at most 4 a / j +
- * 2 sqrt(vg / a) + 2 ticks, traj.h section 6), with a few ticks' rounding.
+ * and a hold at vg long enough for the dip that takes up what the line's
+ * speed cannot (traj.h section 6: a rest-to-rest S-curve of less than a
+ * tick's distance, l->dip ticks at most), with a few ticks' rounding.
  * Saturates. */
-static q32_t stop_room(q32_t v, q32_t acc, q32_t a, q32_t j)
+static q32_t stop_room(q32_t v, q32_t acc, const seek_lim_t *l)
 {
-	int64_t g = (acc + j - 1) / j, vg, t, r1, r2;
+	int64_t g = (acc + l->j - 1) / l->j, vg, r1, r2;
 	if (__builtin_mul_overflow(acc, g + 1, &vg) || __builtin_add_overflow(v, vg / 2, &vg))
 		return INT64_MAX;
-	int64_t aj = a / j;
-	t = vg / a + aj + 4;
-	int64_t hold = g + 5 * aj + 2 * (int64_t)fx_isqrt64((uint64_t)(vg / a)) + 12;
-	if (__builtin_mul_overflow(hold, vg, &r1) || __builtin_mul_overflow(vg, t, &r2) ||
+	int64_t t = vg / l->a + l->a / l->j + 4;
+	if (__builtin_mul_overflow(g + l->dip + 8, vg, &r1) || __builtin_mul_overflow(vg, t, &r2) ||
 	    __builtin_add_overflow(r1, r2 / 2, &r1))
 		return INT64_MAX;
 	return r1;
 }
 
-/* One tick of axis i (tail in lnb[i]) toward a point d away (signed):
- * *v its speed, *acc its last change; cap vc, the set a and j. plan: this
- * tick may plan a tail (one a tick, to bound its cost). Returns whether it
- * planned. */
-static bool seek_axis(motion_t *m, int i, q32_t *v, q32_t *acc, q32_t d, q32_t vc, q32_t a,
-		      q32_t j, bool plan)
+/* The tail to rest over dd from speed u: on the line between speeds, its
+ * top speed searched up to the cap only within 1/64 above u (the law
+ * brought the unit as near the cap as a stop allowed, and the search's
+ * cost grows with its range); from rest on the S-curve, in the line's
+ * ramp buffer. */
+static bool tail_plan(motion_t *m, int i, q32_t dd, q32_t u, const seek_lim_t *l)
 {
 	traj_ln_t *ln = &m->lnb[i];
-	q32_t v0 = *v;
-	if (m->sk_on[i]) {
-		/* To its end (its last tick, at rest, included) unless the cap
-		 * changed under it: then the law goes on from here. */
-		bool last = ln->k >= ln->n;
-		if (last || m->sk_cap[i] == vc) {
-			*v = m->sk_sg[i] * traj_ln_next(ln);
-			*acc = *v - v0;
-			m->sk_on[i] = !last;
-			return false;
-		}
-		m->sk_on[i] = false;
+	m->sk_rest[i] = u == 0;
+	if (u == 0)
+		return traj_sc_plan(&ln->ramp, dd, l->vc, l->a, l->j);
+	q32_t cap = fx_min64(l->vc, u + u / 64 + 2);
+	return traj_ln_plan(ln, dd, u, 0, fx_max64(cap, 2), l->a, l->j);
+}
+
+/* Whether the tail's next step is its last (at rest). */
+static bool tail_done(const motion_t *m, int i)
+{
+	const traj_ln_t *ln = &m->lnb[i];
+	return m->sk_rest[i] ? ln->ramp.k >= ln->ramp.ticks : ln->k >= ln->n;
+}
+
+/* The tail's next step, and whether it was its last (at rest). */
+static q32_t tail_next(motion_t *m, int i, bool *last)
+{
+	traj_ln_t *ln = &m->lnb[i];
+	*last = tail_done(m, i);
+	return m->sk_rest[i] ? traj_sc_next(&ln->ramp) : traj_ln_next(ln);
+}
+
+/* One tick of axis i (tail in lnb[i]) toward a point d away (signed):
+ * *v its speed, *acc its last change; limits l. plan: this tick may plan
+ * a tail (one a tick, to bound its cost). Returns whether it planned. */
+static bool seek_axis(motion_t *m, int i, q32_t *v, q32_t *acc, q32_t d, const seek_lim_t *l,
+		      bool plan)
+{
+	q32_t v0 = *v, a = l->a, j = l->j;
+	/* The tail runs to its end (its last tick, at rest, included) unless
+	 * the cap changed under it: then the law goes on from here. */
+	if (m->sk_on[i] && (m->sk_cap[i] == l->vc || tail_done(m, i))) {
+		bool last;
+		*v = m->sk_sg[i] * tail_next(m, i, &last);
+		*acc = *v - v0;
+		m->sk_on[i] = !last;
+		return false;
 	}
+	m->sk_on[i] = false;
 	q32_t sg = d > 0 || (d == 0 && v0 >= 0) ? 1 : -1;
 	q32_t dd = sg * d, u = sg * v0, au = sg * *acc;
 	bool planned = false;
@@ -100,8 +135,8 @@ static bool seek_axis(motion_t *m, int i, q32_t *v, q32_t *acc, q32_t d, q32_t v
 		traj_jslew(&u, &au, 0, a, j); /* away from the point: to rest */
 	} else {
 		q32_t u1 = u, a1 = au;
-		traj_jslew(&u1, &a1, vc, a, j);
-		if (dd - u1 >= stop_room(u1, fx_max64(a1, 0), a, j)) {
+		traj_jslew(&u1, &a1, l->vc, a, j);
+		if (dd - u1 >= stop_room(u1, fx_max64(a1, 0), l)) {
 			u = u1;
 			au = a1;
 		} else if (au != 0) {
@@ -110,12 +145,13 @@ static bool seek_axis(motion_t *m, int i, q32_t *v, q32_t *acc, q32_t d, q32_t v
 			u += au;
 		} else if (dd == 0 && u == 0) {
 			/* on the point */
-		} else if (plan && traj_ln_plan(ln, dd, u, 0, fx_max64(vc, 2), a, j)) {
+		} else if (plan && tail_plan(m, i, dd, u, l)) {
 			m->sk_on[i] = true;
 			m->sk_sg[i] = (int8_t)sg;
-			m->sk_cap[i] = vc;
+			m->sk_cap[i] = l->vc;
 			planned = true;
-			q32_t n = traj_ln_next(ln);
+			bool last;
+			q32_t n = tail_next(m, i, &last);
 			au = n - u;
 			u = n;
 		} else if (plan) {
@@ -127,6 +163,23 @@ static bool seek_axis(motion_t *m, int i, q32_t *v, q32_t *acc, q32_t d, q32_t v
 	*v = sg * u;
 	*acc = sg * au;
 	return planned;
+}
+
+/* The translation's limits at cap vc (a mecanum axis's share of them),
+ * and the rotation's. */
+static seek_lim_t lim_t(const motion_t *m, q32_t vc, bool share)
+{
+	q32_t a = m->a_t_pt2, j = jerk_or(m->j_t_pt3, a);
+	if (share) {
+		a = half2(a);
+		j = half2(j);
+	}
+	return (seek_lim_t){vc, a, j, m->sk_dip[0]};
+}
+
+static seek_lim_t lim_r(const motion_t *m)
+{
+	return (seek_lim_t){m->v_r_pt, m->a_r_pt2, jerk_or(m->j_r_pt3, m->a_r_pt2), m->sk_dip[1]};
 }
 
 /* Braking (pause, stop): each axis to rest at the limits, reached at the
@@ -168,20 +221,27 @@ static void seek_diff(motion_t *m, q32_t e, q32_t dist, fx_twist_t *vel, fx_twis
 	 * 45 degrees, no translation: to rest while the turn comes round. */
 	q32_t proj = fx_mul_q30(dist, fx_cos_bam(fx_deg_to_bam(e)));
 	q32_t u = dir * vel->vx_pt, au = dir * acc->vx_pt;
-	q32_t jt = jerk_or(m->j_t_pt3, m->a_t_pt2), jr = jerk_or(m->j_r_pt3, m->a_r_pt2);
+	seek_lim_t lt = lim_t(m, vt_eff(m), false), lr = lim_r(m);
+	/* Near the goal the bearing swings: the turn stops while the
+	 * translation runs its course; at rest there, still off the goal (the
+	 * turn had not come round), the unit first faces it exactly, then
+	 * goes the rest straight. */
+	bool near = dist < NEAR_MM, moving = u != 0 || au != 0 || m->sk_on[0];
+	bool facing = (vel->w_pt == 0 && acc->w_pt == 0 && !m->sk_on[1] && ae < TINY_DEG) ||
+		      dist < LAND_DIFF_MM;
+	bool go = near ? moving || facing : ae < fx_from_int(45) || m->sk_on[0];
 	bool planned = false;
-	if (ae < fx_from_int(45) || m->sk_on[0])
-		planned = seek_axis(m, 0, &u, &au, proj, vt_eff(m), m->a_t_pt2, jt, true);
+	if (go)
+		planned = seek_axis(m, 0, &u, &au, proj, &lt, true);
 	else
-		traj_jslew(&u, &au, 0, m->a_t_pt2, jt);
+		traj_jslew(&u, &au, 0, lt.a, lt.j);
 	vel->vx_pt = dir * u;
 	acc->vx_pt = dir * au;
-	/* The bearing is the rotation's point while the goal is not near. */
-	if (dist < NEAR_MM) {
+	if (near && (go || u != 0 || au != 0)) {
 		m->sk_on[1] = false;
-		traj_jslew(&vel->w_pt, &acc->w_pt, 0, m->a_r_pt2, jr);
+		traj_jslew(&vel->w_pt, &acc->w_pt, 0, lr.a, lr.j);
 	} else {
-		seek_axis(m, 1, &vel->w_pt, &acc->w_pt, e, m->v_r_pt, m->a_r_pt2, jr, !planned);
+		seek_axis(m, 1, &vel->w_pt, &acc->w_pt, e, &lr, !planned);
 	}
 }
 
@@ -192,20 +252,22 @@ static void seek_omni(motion_t *m, q32_t dx, q32_t dy, fx_twist_t *vel, fx_twist
 	int32_t c = m->sk_c, s = m->sk_s;
 	q32_t du = fx_mul_q30(dx, c) + fx_mul_q30(dy, s);
 	q32_t dn = fx_mul_q30(dy, c) - fx_mul_q30(dx, s);
-	q32_t a = half2(m->a_t_pt2), j = half2(jerk_or(m->j_t_pt3, m->a_t_pt2)), vc = vt_eff(m);
+	q32_t vc = vt_eff(m);
 	/* Across the line as well (the retarget left motion across it, or
 	 * the pose moved off it): each axis within 1 / sqrt(2) of the speed
 	 * too. Less than the landing's tolerance off it is not motion. */
 	bool across = m->sk_v[1] | m->sk_a[1] | m->sk_on[1] || dn >= LAND_MM || dn <= -LAND_MM;
 	if (across)
 		vc = half2(vc);
-	bool planned = seek_axis(m, 0, &m->sk_v[0], &m->sk_a[0], du, vc, a, j, true);
+	seek_lim_t l = lim_t(m, vc, true);
+	bool planned = seek_axis(m, 0, &m->sk_v[0], &m->sk_a[0], du, &l, true);
 	if (across)
-		seek_axis(m, 1, &m->sk_v[1], &m->sk_a[1], dn, vc, a, j, !planned);
+		seek_axis(m, 1, &m->sk_v[1], &m->sk_a[1], dn, &l, !planned);
 	vel->vx_pt = fx_mul_q30(m->sk_v[0], c) - fx_mul_q30(m->sk_v[1], s);
 	vel->vy_pt = fx_mul_q30(m->sk_v[0], s) + fx_mul_q30(m->sk_v[1], c);
 	acc->vx_pt = acc->vy_pt = 0; /* set by the caller from the twist */
-	traj_jslew(&vel->w_pt, &acc->w_pt, 0, m->a_r_pt2, jerk_or(m->j_r_pt3, m->a_r_pt2));
+	seek_lim_t lr = lim_r(m);
+	traj_jslew(&vel->w_pt, &acc->w_pt, 0, lr.a, lr.j);
 }
 
 /* A new goal: the tails are dropped; a mecanum base takes the goal's
@@ -214,7 +276,14 @@ void motion_seek_retarget(motion_t *m)
 {
 	m->sk_on[0] = m->sk_on[1] = false;
 	m->ln_next = LN_NEXT_NONE; /* the line buffers serve the tails now */
-	if (m->p.kin != MOTION_KIN_OMNI)
+	/* The dips' bound (stop_room) for a tick's distance at the limit. */
+	bool omni = m->p.kin == MOTION_KIN_OMNI;
+	m->sk_dip[0] = 0;
+	m->sk_dip[1] = 0;
+	seek_lim_t lt = lim_t(m, 0, omni), lr = lim_r(m);
+	m->sk_dip[0] = traj_sc_ticks_bound(m->vmax_t_pt, lt.a, lt.j);
+	m->sk_dip[1] = traj_sc_ticks_bound(m->vmax_r_pt, lr.a, lr.j);
+	if (!omni)
 		return;
 	q32_t wx = m->goal.x_mm - m->ref.x_mm, wy = m->goal.y_mm - m->ref.y_mm, dx, dy;
 	motion_body_to_world(-m->ref.th_deg, wx, wy, &dx, &dy);
@@ -237,7 +306,8 @@ void motion_seek_retarget(motion_t *m)
 static bool seek_heading(motion_t *m, fx_twist_t *vel, fx_twist_t *acc)
 {
 	q32_t e = fx_wrap_deg(m->goal.th_deg - m->ref.th_deg);
-	seek_axis(m, 1, &vel->w_pt, &acc->w_pt, e, m->v_r_pt, m->a_r_pt2, jerk_or(m->j_r_pt3, m->a_r_pt2), true);
+	seek_lim_t lr = lim_r(m);
+	seek_axis(m, 1, &vel->w_pt, &acc->w_pt, e, &lr, true);
 	return !m->sk_on[1] && vel->w_pt == 0 && acc->w_pt == 0 && fx_abs64(e) < TINY_DEG;
 }
 
@@ -280,7 +350,8 @@ void motion_seek_tick(motion_t *m, fx_twist_t *out)
 	odom_integrate(&m->ref, out, NULL);
 	bool still = vel.vx_pt == 0 && vel.vy_pt == 0 && !m->sk_on[0] && !m->sk_on[1];
 	if (!m->goal_position_done && !braking && still && acc.vx_pt == 0 && acc.vy_pt == 0 &&
-	    fx_hypot(m->goal.x_mm - m->ref.x_mm, m->goal.y_mm - m->ref.y_mm) < LAND_MM) {
+	    fx_hypot(m->goal.x_mm - m->ref.x_mm, m->goal.y_mm - m->ref.y_mm) <
+		(omni ? LAND_MM : LAND_DIFF_MM)) {
 		m->ref.x_mm = m->goal.x_mm;
 		m->ref.y_mm = m->goal.y_mm;
 		m->goal_position_done = true;

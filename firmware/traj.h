@@ -204,6 +204,9 @@ typedef struct {
 bool traj_sc_plan(traj_sc_t *p, q32_t d, q32_t v, q32_t a, q32_t j);
 /* The next step (0 once the profile is complete); the steps sum to d. */
 q32_t traj_sc_next(traj_sc_t *p);
+/* An upper bound on traj_sc_plan's ticks for d (> 0) at a and j with no
+ * speed cap. */
+int64_t traj_sc_ticks_bound(q32_t d, q32_t a, q32_t j);
 /* A planned jerk-limited line between speeds and its sampler (section 6). */
 typedef struct {
 	traj_sc_t ramp;		    /* the ramp running (phases 0 and 2) */

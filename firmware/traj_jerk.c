@@ -38,6 +38,17 @@ static int64_t icbrt(uint64_t x)
 	return (int64_t)y;
 }
 
+int64_t traj_sc_ticks_bound(q32_t d, q32_t a, q32_t j)
+{
+	/* Continuous time: 4 cbrt(d / 2J) when the jerk alone binds, else
+	 * A / J + sqrt((A / J)^2 + 4 d / A) <= 2 A / J + 2 sqrt(d / A) with
+	 * A / J < cbrt(d / 2J): the sum bounds both. The whole ticks and the
+	 * margins add a few (section 4). */
+	int64_t am = fx_max64(a - 2, 1), jm = fx_max64(j - 4, 1);
+	return 4 * (icbrt((uint64_t)(d / (2 * jm))) + 1) +
+	       2 * ((int64_t)fx_isqrt64((uint64_t)(d / am)) + 1) + 8;
+}
+
 /* The shortest Nv that a given Na, Nj allows (traj.h, section 4). */
 static __attribute__((noinline)) int64_t sc_nv(const traj_sc_t *p, int64_t d, int64_t nv_v,
 					       int64_t na, int64_t nj)

@@ -8,7 +8,7 @@
  *   - the commanded body velocity stays within getVelocityLimit, and while
  *     the servo stays on it changes by at most getAccelerationLimit;
  *   - under jerk limits, the motions that honour them (differential path
- *     moves from rest to rest, jog and joystick, their stops and pauses)
+ *     moves, jog, joystick and continuous goals, their stops and pauses)
  *     change that acceleration by at most the jerk limit;
  *     a differential base never gets y velocity;
  *   - a fault or power off leaves every drive disabled with a zero setpoint;
@@ -163,6 +163,7 @@ static bool jerk_applies(const vehicle_t *v, const fx_twist_t *t)
 		return S.cfg.kinematics == VS_KIN_DIFF && (m->lim_j > 0 || twist_zero(t));
 	case MODE_JOG:
 	case MODE_JOYSTICK:
+	case MODE_CONTINUOUS:
 		return m->j_t_pt3 > 0 && m->j_r_pt3 > 0;
 	default:
 		return false;
@@ -180,6 +181,7 @@ static void check_jerk(const vehicle_t *v, const fx_twist_t *t)
 	fx_twist_t acc = {t->vx_pt - prev_cmd.vx_pt, t->vy_pt - prev_cmd.vy_pt,
 			  t->w_pt - prev_cmd.w_pt};
 	bool pre_ok = mode_pre == MODE_IDLE || mode_pre == MODE_JOG || mode_pre == MODE_JOYSTICK ||
+		      mode_pre == MODE_CONTINUOUS ||
 		      (mode_pre == MODE_PATH && S.cfg.kinematics == VS_KIN_DIFF);
 	bool applies = jerk_applies(v, t) && prev_servo && pre_ok;
 	/* The set jerk while moving, the limit while braking: the larger

@@ -72,12 +72,21 @@ long bench_scenario(rig_t *r, const char *sc, const bench_hooks_t *h)
 			}
 			tick(r, h, "tick");
 		}
-	} else if (strcmp(sc, "retarget") == 0) {
+	} else if (strcmp(sc, "retarget") == 0 || strcmp(sc, "retarget_jerk") == 0) {
+		/* Under jerk limits every tick counts: a tail to rest may be
+		 * planned on any of them. */
+		bool jerk = sc[8] != 0;
+		if (jerk)
+			need(vehicle_set_jerk(&r->v, 2000.0, 1000.0), "$jerk");
 		need(vs_moveContinuousRel(&r->v, (vs_position_t){3000.0, 0.0, 0.0}),
 		     "moveContinuousRel");
 		for (int k = 0; k < 20; k++) {
-			for (int i = 0; i < 250; i++)
-				rig_tick(r);
+			for (int i = 0; i < 250; i++) {
+				if (jerk)
+					tick(r, h, "tick");
+				else
+					rig_tick(r);
+			}
 			/* Alternate left and right goals ahead: a new bearing each time. */
 			double side = (k & 1) ? -400.0 : 400.0;
 			need(h->retarget(r, (vs_position_t){1500.0, side, side / 20.0}, "cmd"),
