@@ -180,8 +180,10 @@ void motion_halt(motion_t *m)
 	m->vel = (fx_twist_t){0};
 	m->vacc = (fx_twist_t){0};
 	m->vtarget = (fx_twist_t){0};
-	m->sk_on[0] = m->sk_on[1] = false;
-	m->sk_v[0] = m->sk_v[1] = m->sk_a[0] = m->sk_a[1] = 0;
+	if (ONLINE_JERK) { /* the continuous goal's law (motion_seek.c) */
+		m->sk_on[0] = m->sk_on[1] = false;
+		m->sk_v[0] = m->sk_v[1] = m->sk_a[0] = m->sk_a[1] = 0;
+	}
 	m->stopping = false;
 	m->paused = false;
 	m->rest_tick = false;
