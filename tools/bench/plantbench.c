@@ -4,7 +4,8 @@
  * differential and the mecanum configuration. Run from the top folder.
  *   plantbench [VEHICLE.xml ...]   (default: config/vehicle.xml
  *                                   config/vehicle-omni.xml
- *                                   config/vehicle-jerk.xml)
+ *                                   config/vehicle-jerk.xml
+ *                                   config/vehicle-omni-jerk.xml)
  */
 #include <math.h>
 #include <stdio.h>
@@ -83,7 +84,8 @@ static int run_config(const char *path)
 int main(int argc, char **argv)
 {
 	static const char *const defaults[] = {"config/vehicle.xml", "config/vehicle-omni.xml",
-					       "config/vehicle-jerk.xml"};
+					       "config/vehicle-jerk.xml",
+					       "config/vehicle-omni-jerk.xml"};
 	int rc = 0;
 	if (argc > 1) {
 		for (int i = 1; i < argc; i++)
