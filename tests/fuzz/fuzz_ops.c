@@ -173,6 +173,7 @@ static bool jerk_applies(const vehicle_t *v, const fx_twist_t *t)
 /* The mode the tick began in (an action between two ticks may have
  * switched it): a tick counts only when that mode honours the jerk too. */
 static uint8_t mode_pre;
+static bool jerk_set_pre; /* both jerks set when the tick began ($jerk between) */
 static int corner_recent;
 
 static void check_jerk(const vehicle_t *v, const fx_twist_t *t)
@@ -180,8 +181,9 @@ static void check_jerk(const vehicle_t *v, const fx_twist_t *t)
 	const motion_t *m = &v->motion;
 	fx_twist_t acc = {t->vx_pt - prev_cmd.vx_pt, t->vy_pt - prev_cmd.vy_pt,
 			  t->w_pt - prev_cmd.w_pt};
-	bool pre_ok = mode_pre == MODE_IDLE || mode_pre == MODE_JOG || mode_pre == MODE_JOYSTICK ||
-		      mode_pre == MODE_CONTINUOUS ||
+	bool vel_mode =
+	    mode_pre == MODE_JOG || mode_pre == MODE_JOYSTICK || mode_pre == MODE_CONTINUOUS;
+	bool pre_ok = mode_pre == MODE_IDLE || (vel_mode && jerk_set_pre) ||
 		      (mode_pre == MODE_PATH && S.cfg.kinematics == VS_KIN_DIFF);
 	bool applies = jerk_applies(v, t) && prev_servo && pre_ok;
 	/* The set jerk while moving, the limit while braking: the larger
@@ -305,6 +307,7 @@ static void tick(void)
 	if (plan_budget)
 		vehicle_plan_idle(&S.vehicle);
 	mode_pre = motion_mode(&S.vehicle.motion);
+	jerk_set_pre = S.vehicle.motion.j_t_pt3 > 0 && S.vehicle.motion.j_r_pt3 > 0;
 	sim_tick(&S);
 	check_tick();
 }
