@@ -233,5 +233,17 @@ int main(void)
 	jerk_t = 2000;
 	jerk_r = 1000;
 	single_moves("_jerk", ", jerk 2000 mm/s^3, 1000 deg/s^3");
+
+	/* The continuous goal's online law (motion_seek.c) from rest against
+	 * the reference's time-optimal S-curve over the same 1000 mm: how far
+	 * the law that can be retargeted falls behind the planned profile. */
+	setup();
+	fx_pose_t g = {q(1000), 0, 0};
+	if (!motion_continuous_rel(&eng, &g) || !ref_forward(&ref, 1000))
+		fail("continuous");
+	run("continuous_jerk",
+	    "moveContinuousRel 1000 0 0 from rest, jerk 2000 mm/s^3, against the reference's "
+	    "moveForward 1000",
+	    (pt_t){1000, 0, 0});
 	return 0;
 }
