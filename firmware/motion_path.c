@@ -844,14 +844,19 @@ static inline __attribute__((always_inline)) void piece_begin(motion_t *m)
 {
 	m->seg.s = 0;
 	m->fresh = true;
+	q32_t was = m->lim_j;
 	m->lim_j = 0;
 	/* The profiles are dropped where a piece ends (piece_finish) or the
 	 * unit stops (stop_done, motion_halt). A cruise line runs along its
-	 * heading: its jerk is the translation's. */
+	 * heading: its jerk is the translation's, when the piece before ran
+	 * under it too or left an acceleration the jerk can take over; after
+	 * an acceleration-limited corner's larger one, the line runs as that
+	 * corner did (else the jerk could not turn it round before rest). */
 	if (m->jerk_any) {
-		if (ONLINE_JERK && m->seg.kind == SEG_LINE && q_at(m, 0)->kind == MCMD_CRUISE)
-			m->lim_j = m->j_t_pt3;
-		else if (m->v == 0 && !blends_onward(m, m->seg.kind))
+		if (ONLINE_JERK && m->seg.kind == SEG_LINE && q_at(m, 0)->kind == MCMD_CRUISE) {
+			if (was > 0 || fx_abs64(m->acc) <= m->j_t_pt3)
+				m->lim_j = m->j_t_pt3;
+		} else if (m->v == 0 && !blends_onward(m, m->seg.kind))
 			m->lim_j = piece_jerk(&m->seg, m->j_t_pt3, m->j_r_pt3);
 	}
 	limits_changed(m);
