@@ -234,6 +234,17 @@ int main(void)
 	jerk_r = 1000;
 	single_moves("_jerk", ", jerk 2000 mm/s^3, 1000 deg/s^3");
 
+	/* The blended cruise under jerk limits: lines between the corner
+	 * speeds (traj.h section 6), corners holding theirs. */
+	setup();
+	for (int i = 0; i < ROUTE_N; i++)
+		if (!motion_cruise_abs(&eng, q(route_mm[i][0]), q(route_mm[i][1])))
+			fail("cruise_jerk");
+	if (!ref_cruise(&ref, route_mm, ROUTE_N))
+		fail("reference cruise_jerk");
+	run("cruise_jerk", "10-waypoint moveCruiseAbs route, jerk 2000 mm/s^3, 1000 deg/s^3",
+	    (pt_t){route_mm[ROUTE_N - 1][0], route_mm[ROUTE_N - 1][1], hl});
+
 	/* The continuous goal's online law (motion_seek.c) from rest against
 	 * the reference's time-optimal S-curve over the same 1000 mm: how far
 	 * the law that can be retargeted falls behind the planned profile. */

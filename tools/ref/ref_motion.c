@@ -265,6 +265,11 @@ bool ref_cruise(ref_t *r, const double (*wp)[2], int n)
 		    fmax(0, seg[i] - (i && corner[i - 1] ? t[i - 1] : 0) - (corner[i] ? t[i] : 0));
 	/* Backward pass: brake to the next corner's speed, and to rest at the end. */
 	double next = 0;
+	/* Under a jerk limit the braking counts on A / J + 4 ticks at the
+	 * line speed less of each line (the ramps' extra time, whole ticks). */
+	double slack = 0;
+	if (r->p.jt > 0)
+		slack = vt_pt(r) * (floor(at_pt(r) / jt_pt(r) + 1e-9) + 4);
 	for (int i = n - 1; i >= 0; i--) {
 		if (!corner[i]) {
 			next = vend[i] = 0;
@@ -272,7 +277,7 @@ bool ref_cruise(ref_t *r, const double (*wp)[2], int n)
 		}
 		double v = cap[i];
 		if (i + 1 < n)
-			v = fmin(v, reach(line[i + 1], next, at_pt(r)));
+			v = fmin(v, reach(line[i + 1] - slack, next, at_pt(r)));
 		vend[i] = next = v;
 	}
 	for (int i = 0; i < n; i++) {
@@ -288,6 +293,7 @@ bool ref_cruise(ref_t *r, const double (*wp)[2], int n)
 		ref_piece_t *l = &r->pc[r->n - 1];
 		l->vend = vend[i];
 		l->blend = corner[i];
+		l->cruise = true;
 		if (!corner[i] || lh[i] == 0)
 			continue;
 		ref_piece_t *c = add(r, REF_CORNER);
@@ -358,6 +364,163 @@ static double sc_count(const ref_piece_t *c, long k)
 	long k2 = k - c->nv;
 	double b = k2 < 0 ? 0 : c->tri_cum[k2 > last ? last : k2];
 	return a - b;
+}
+
+/* ---- jerk-limited lines between speeds (traj.h, section 6, derived again) */
+
+static void advance(ref_t *r, const ref_piece_t *c, double s0, double s1);
+
+/* The shortest whole-tick ramp boxes (Na >= Nj, Na + Nj least, the
+ * smaller Nj on a tie) that change the speed by delta > 0 within a and j:
+ * delta <= a Na and delta <= j Na Nj. */
+static void ramp_boxes(double delta, double a, double j, long *na, long *nj)
+{
+	long best = -1, hi = (long)ceil(a / j) + 2;
+	for (long t = 1; t <= hi; t++) {
+		double n = fmax((double)t, fmax(ceil(delta / a), ceil(delta / (j * t))));
+		if (best < 0 || (long)n + t < best) {
+			best = (long)n + t;
+			*na = (long)n;
+			*nj = t;
+		}
+	}
+}
+
+/* The line's length for speed w and k ticks at it on the boxes in c: the
+ * ramp of delta on (Na, Nj) covers delta (Na + Nj) / 2 over its L = Na +
+ * Nj - 1 ticks beyond the speed it starts from. */
+static double ln_len(const ref_piece_t *c, double w, long k)
+{
+	double l1 = (double)(c->na1 + c->nj1 - 1), l2 = (double)(c->na2 + c->nj2 - 1);
+	double d1 = w - c->cin;
+	return c->cin * l1 + d1 * (double)(c->na1 + c->nj1) / 2 + w * ((double)k + l2) -
+	       (w - c->cout) * (double)(c->na2 + c->nj2) / 2;
+}
+
+/* The boxes for top speed w (one tick at least each, as the firmware
+ * keeps); w1 shapes the first ramp. */
+static void ln_boxes(ref_piece_t *c, double w1, double w2, double a, double j)
+{
+	c->na1 = c->nj1 = c->na2 = c->nj2 = 1;
+	if (fabs(w1 - c->cin) > 0)
+		ramp_boxes(fabs(w1 - c->cin), a, j, &c->na1, &c->nj1);
+	if (w2 - c->cout > 0)
+		ramp_boxes(w2 - c->cout, a, j, &c->na2, &c->nj2);
+}
+
+/* Plans the line of len from cin to cout: the fastest top speed whose
+ * ramps fit with no tick at it (to 1/256 of it, as the firmware searches),
+ * the ticks at it that the rest fills, and the top speed that then covers
+ * len exactly (the firmware spreads a remainder of raw units instead).
+ * False when even the ramp from cin to cout does not fit. */
+static bool ln_plan(ref_piece_t *c, double len, double cin, double cout)
+{
+	double vm = (floor(c->vmax / RAW) - 1) * RAW, a = (floor(c->a / RAW) - 2) * RAW;
+	double j = (floor(c->j / RAW) - 5) * RAW, lo, wmin;
+	c->cin = cin;
+	c->cout = cout = fmin(cout, vm);
+	if (cin > vm) {
+		lo = vm;
+		wmin = vm - vm / 64;
+		ln_boxes(c, wmin, lo, a, j);
+		if (ln_len(c, lo, 0) > len)
+			return false;
+	} else {
+		double hi = vm;
+		lo = wmin = fmax(cin, cout);
+		ln_boxes(c, hi, hi, a, j);
+		if (ln_len(c, hi, 0) <= len) {
+			lo = hi;
+		} else {
+			ln_boxes(c, lo, lo, a, j);
+			if (ln_len(c, lo, 0) > len)
+				return false;
+			while (hi - lo > RAW && hi - lo > lo / 256) {
+				double mid = lo + (hi - lo) / 2;
+				ln_boxes(c, mid, mid, a, j);
+				if (ln_len(c, mid, 0) <= len)
+					lo = mid;
+				else
+					hi = mid;
+			}
+		}
+		ln_boxes(c, lo, lo, a, j);
+	}
+	/* On these boxes the length is linear in w, slope b. */
+	long k = (long)floor((len - ln_len(c, lo, 0)) / lo);
+	double b = (double)(c->na1 + c->nj1 + c->na2 + c->nj2) / 2 + (double)k - 1;
+	double w = lo + (len - ln_len(c, lo, k)) / b;
+	double n = (double)(c->na1 + c->nj1 + c->na2 + c->nj2 - 2 + k);
+	if (len - ln_len(c, lo, k) >= n * RAW) {
+		/* A tick more, the top speed lowered to fit, down to wmin. */
+		k++;
+		b += 1;
+		w = lo + (len - ln_len(c, lo, k)) / b;
+		if (w < wmin) {
+			k--;
+			b -= 1;
+			w = lo + (len - ln_len(c, lo, k)) / b;
+		}
+	}
+	c->w = w;
+	c->nk = k;
+	return true;
+}
+
+/* The count of the Na and Nj boxes convolved at step m (a trapezoid). */
+static double trap(long m, long na, long nj)
+{
+	long lo = m - nj + 1 > 0 ? m - nj + 1 : 0, hi = m < na - 1 ? m : na - 1;
+	return hi >= lo ? (double)(hi - lo + 1) : 0;
+}
+
+/* One tick of a cruise line between speeds: the ramps' speeds are their
+ * boxes' cumulative counts over Na Nj of the way. */
+static double ln_speed(ref_t *r, const ref_piece_t *c)
+{
+	long k = r->k, l1 = c->na1 + c->nj1 - 1;
+	if (k < l1) {
+		r->c1 += trap(k, c->na1, c->nj1);
+		return c->cin + (c->w - c->cin) * r->c1 / (double)(c->na1 * c->nj1);
+	}
+	if (k < l1 + c->nk)
+		return c->w;
+	r->c2 += trap(k - l1 - c->nk, c->na2, c->nj2);
+	return c->w - (c->w - c->cout) * r->c2 / (double)(c->na2 * c->nj2);
+}
+
+/* A cruise line under a jerk limit: planned on its first tick from the
+ * speed it is entered at, over what is left of it, into its corner's
+ * speed (rest at the route's end); it lands on its end on its last tick,
+ * and the corner after it holds that speed. */
+static void ln_step(ref_t *r, ref_piece_t *c)
+{
+	if (r->k == 0) {
+		r->c1 = r->c2 = 0;
+		double cout = c->blend ? fmin(c->vend, c->vmax - RAW) : 0;
+		if (!ln_plan(c, c->len - r->s, r->v, cout)) {
+			c->j = 0; /* as the firmware: brake, plan at rest */
+			return;
+		}
+	}
+	long n = c->na1 + c->nj1 + c->na2 + c->nj2 - 2 + c->nk;
+	double u = ln_speed(r, c);
+	r->k++;
+	if (r->k >= n) {
+		r->pose = c->p1;
+		r->v = c->cout;
+		r->s = 0;
+		r->k = 0;
+		r->cur++;
+		if (!c->blend) {
+			r->v = 0;
+			r->settle = true;
+		}
+		return;
+	}
+	advance(r, c, r->s, r->s + u);
+	r->s += u;
+	r->v = u;
 }
 
 /* ---- execution -------------------------------------------------------- */
@@ -431,6 +594,15 @@ bool ref_step(ref_t *r)
 	if (r->cur >= r->n)
 		return false;
 	ref_piece_t *c = &r->pc[r->cur];
+	if (c->kind == REF_LINE && c->j > 0 && c->cruise && (c->blend || r->v > 0)) {
+		if (r->settle && r->k == 0 && r->v == 0) {
+			r->settle = false; /* a tick at rest after the turn */
+			return true;
+		}
+		ln_step(r, c);
+		if (c->j > 0)
+			return true;
+	}
 	if (c->j > 0 && !c->blend && r->v == 0) {
 		if (r->settle && r->k == 0) {
 			r->settle = false; /* a tick at rest between two pieces */
@@ -439,7 +611,9 @@ bool ref_step(ref_t *r)
 		sc_step(r, c);
 		return true;
 	}
-	r->v = step(r->v, horizon(c, c->len - r->s), c->vmax, c->a);
+	/* A corner under a jerk limit holds the speed it is entered at. */
+	if (!(c->kind == REF_CORNER && r->p.jt > 0))
+		r->v = step(r->v, horizon(c, c->len - r->s), c->vmax, c->a);
 	double budget = r->v;
 	for (;;) {
 		c = &r->pc[r->cur];
