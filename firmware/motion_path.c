@@ -557,6 +557,26 @@ static void plan_new_limit(motion_t *m)
 	}
 }
 
+/* A waypoint queued while a line runs to rest on its plan made the line a
+ * blend (motion_plan_corner): it glides into the new corner (the
+ * acceleration to zero at the jerk, then the line from that speed to the
+ * corner's, as for a new speed limit), unless it is already in its last
+ * ramp to rest, which runs on and stops on the waypoint (no corner is
+ * fitted then). */
+bool motion_line_may_blend(const motion_t *m)
+{
+	const traj_ln_t *ln = &m->lnb[m->ln_i];
+	if (m->sc_on)
+		return m->sc.k < m->sc.nv;
+	return m->ln_on && ln->k <= ln->l1 + ln->hold;
+}
+
+void motion_line_glide(motion_t *m)
+{
+	plan_drop(m);
+	m->glide = true;
+}
+
 /* A piece begun at speed (a cruise line or corner, under jerk limits): a
  * corner holds the speed it is entered at (its rotation is the clothoid's),
  * a line runs from it to its corner's speed (traj.h, section 6). */
@@ -844,17 +864,17 @@ static inline __attribute__((always_inline)) void piece_begin(motion_t *m)
 {
 	m->seg.s = 0;
 	m->fresh = true;
-	q32_t was = m->lim_j;
 	m->lim_j = 0;
 	/* The profiles are dropped where a piece ends (piece_finish) or the
 	 * unit stops (stop_done, motion_halt). A cruise line runs along its
-	 * heading: its jerk is the translation's, when the piece before ran
-	 * under it too or left an acceleration the jerk can take over; after
-	 * an acceleration-limited corner's larger one, the line runs as that
-	 * corner did (else the jerk could not turn it round before rest). */
+	 * heading: its jerk is the translation's, when it is entered with an
+	 * acceleration the jerk can take over (|acc| <= J, one compare);
+	 * after an acceleration-limited corner's larger one the line runs as
+	 * that corner did (else the jerk could not turn it round before rest,
+	 * and the speed went below zero). */
 	if (m->jerk_any) {
 		if (ONLINE_JERK && m->seg.kind == SEG_LINE && q_at(m, 0)->kind == MCMD_CRUISE) {
-			if (was > 0 || fx_abs64(m->acc) <= m->j_t_pt3)
+			if ((uint64_t)(m->acc + m->j_t_pt3) <= (uint64_t)(2 * m->j_t_pt3))
 				m->lim_j = m->j_t_pt3;
 		} else if (m->v == 0 && !blends_onward(m, m->seg.kind))
 			m->lim_j = piece_jerk(&m->seg, m->j_t_pt3, m->j_r_pt3);

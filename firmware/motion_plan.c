@@ -217,8 +217,11 @@ bool motion_plan_corner(motion_t *m, uint8_t i)
 	t = fx_min64(t, lout / 2);
 	q32_t rem = 0;
 	bool executing = (i == 0) && head_line_remaining(m, &rem);
-	if (executing && m->lim_j > 0)
-		return false; /* planned from rest to rest (jerk limits): it stops there */
+	/* A line running to rest under a jerk limit glides into the corner
+	 * (motion_path.c, motion_line_glide) unless it is in its last ramp,
+	 * which stops on the waypoint. */
+	if (executing && m->lim_j > 0 && (!ONLINE_JERK || !motion_line_may_blend(m)))
+		return false;
 	if (executing)
 		t = fx_min64(t, rem - m->v - m->v_t_pt);
 	traj_corner_t corner;
@@ -233,14 +236,23 @@ bool motion_plan_corner(motion_t *m, uint8_t i)
 	c->exit_y_mm = c->target.y_mm + fx_mul_q30(corner.t_mm, n->uy);
 	motion_backward_pass_from(m, i);
 	if (executing) {
-		/* Can the unit still slow to the corner speed before it begins? */
+		/* Can the unit still slow to the corner speed before it begins?
+		 * Under a jerk limit the glide and the ramps take up to 2 A / J +
+		 * 6 ticks more, at up to the speed the glide reaches. */
 		q32_t d = rem - corner.t_mm;
+		if (ONLINE_JERK && m->lim_j > 0) {
+			q32_t aj = m->a_t_pt2 / m->lim_j;
+			d -= (m->v + m->a_t_pt2 * (aj + 1) / 2) * (2 * aj + 6);
+		}
 		if (traj_reach(d, c->vend_pt, m->a_t_pt2) < m->v) {
 			c->has_corner = false;
 			motion_backward_pass_from(m, i);
 			return true;
 		}
-		/* The line now ends at the corner entry. */
+		/* The line now ends at the corner entry; under a jerk limit it
+		 * glides into it from the next tick. */
+		if (ONLINE_JERK && m->lim_j > 0)
+			motion_line_glide(m);
 		m->seg.len -= corner.t_mm;
 		m->seg.p_end.x_mm = c->target.x_mm - fx_mul_q30(corner.t_mm, c->ux);
 		m->seg.p_end.y_mm = c->target.y_mm - fx_mul_q30(corner.t_mm, c->uy);

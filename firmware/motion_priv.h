@@ -91,6 +91,12 @@ static inline bool twist_zero(const fx_twist_t *t)
 	return t->vx_pt == 0 && t->vy_pt == 0 && t->w_pt == 0;
 }
 
+/* motion_path.c: whether the line running to rest on its jerk-limited
+ * plan can still glide into a corner queued now (not in its last ramp),
+ * and the glide's start. */
+bool motion_line_may_blend(const motion_t *m);
+void motion_line_glide(motion_t *m);
+
 /* motion_seek.c: the continuous goal's tick under jerk limits, and its
  * retarget (a new goal). */
 void motion_seek_tick(motion_t *m, fx_twist_t *out);

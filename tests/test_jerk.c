@@ -779,27 +779,52 @@ static void test_continuous_after_halt(void **state)
 }
 
 /* A cruise waypoint queued while the line to the last one runs on its
- * jerk-limited profile (planned from rest to rest): the line keeps its
- * plan and stops on its waypoint to the raw unit, within the jerk; the
- * route goes on from there. */
+ * jerk-limited profile (planned from rest to rest), 300 ticks in, while
+ * accelerating: the line glides into the new corner (the acceleration to
+ * zero at the jerk, then the line to the corner's speed), never standing
+ * still before the end, within the set acceleration and jerk along the
+ * path, and the route lands on the new waypoint to the raw unit (6,959
+ * ticks after the request). Queued in the line's last ramp to rest (tick
+ * 2,600 of 3,250), the line runs on and stops on its waypoint to the raw
+ * unit; the route goes on from there (5,583 ticks). */
 static void test_waypoint_queued_on_a_planned_line(void **state)
 {
 	(void)state;
-	jrig_t r;
-	jrig_init(&r, MOTION_KIN_DIFF);
-	assert_true(motion_cruise_abs(&r.m, (q32_t)1000 << 32, 0));
-	for (int i = 0; i < 300; i++)
+	static const int at[2] = {300, 2600};
+	for (int late = 0; late < 2; late++) {
+		jrig_t r;
+		jrig_init(&r, MOTION_KIN_DIFF);
+		assert_true(motion_cruise_abs(&r.m, (q32_t)1000 << 32, 0));
+		for (int i = 0; i < at[late]; i++)
+			jrig_tick(&r);
+		assert_true(r.m.lim_j > 0 && r.m.sc_on);
+		assert_true(motion_cruise_abs(&r.m, (q32_t)1000 << 32, (q32_t)1000 << 32));
+		int stood = 0, n = 0;
+		bool stopped_on_first = false;
+		for (; motion_has_work(&r.m) && n < 20000; n++) {
+			jrig_tick(&r);
+			bool rest = r.u1[0] == 0 && r.u1[2] == 0;
+			if (rest && motion_has_work(&r.m)) {
+				stood++;
+				stopped_on_first =
+				    stopped_on_first ||
+				    (r.m.ref.x_mm == (q32_t)1000 << 32 && r.m.ref.y_mm == 0);
+			}
+		}
 		jrig_tick(&r);
-	assert_true(r.m.lim_j > 0 && r.m.sc_on);
-	assert_true(motion_cruise_abs(&r.m, (q32_t)1000 << 32, (q32_t)1000 << 32));
-	while (r.m.q_count == 2 && r.moving_ticks < 20000)
-		jrig_tick(&r);
-	assert_int_equal(r.m.ref.x_mm, (q32_t)1000 << 32);
-	assert_int_equal(r.m.ref.y_mm, 0);
-	assert_true(r.jmax[0] <= r.m.j_t_pt3);
-	jrig_run(&r, 20000);
-	assert_int_equal(r.m.ref.x_mm, (q32_t)1000 << 32);
-	assert_int_equal(r.m.ref.y_mm, (q32_t)1000 << 32);
+		assert_int_equal(r.m.ref.x_mm, (q32_t)1000 << 32);
+		assert_int_equal(r.m.ref.y_mm, (q32_t)1000 << 32);
+		assert_true(r.amax[0] <= r.m.a_t_pt2);
+		assert_true(r.jmax[0] <= r.m.j_t_pt3);
+		static const int ticks[2] = {6959, 5583};
+		assert_int_equal(n, ticks[late]);
+		if (late) {
+			assert_true(stopped_on_first);
+		} else {
+			assert_int_equal(stood, 0);
+			assert_false(stopped_on_first);
+		}
+	}
 }
 
 /* A blended cruise route under jerk limits: 1000 mm out, 1000 mm across,
