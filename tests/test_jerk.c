@@ -754,6 +754,56 @@ static void test_continuous_retarget(void **state)
 		}
 }
 
+/* A continuous goal stopped or paused while cruising (tick 1,500 of a
+ * 3000 mm goal): it brakes to rest at the acceleration limit reached at
+ * the jerk limit, within those limits on every tick; stopped, the unit is
+ * idle; paused and resumed at rest, it goes on and lands on the goal to
+ * the raw unit within the set limits. */
+static void test_continuous_stop_and_pause(void **state)
+{
+	(void)state;
+	for (int k = 0; k < 2; k++)
+		for (int pause = 0; pause < 2; pause++) {
+			jrig_t r;
+			jrig_init(&r, k ? MOTION_KIN_OMNI : MOTION_KIN_DIFF);
+			fx_pose_t g = {(q32_t)3000 << 32, 0, 0};
+			assert_true(motion_continuous_rel(&r.m, &g));
+			for (int i = 0; i < 1500; i++)
+				jrig_tick(&r);
+			jrig_reset_peaks(&r);
+			if (pause)
+				motion_pause(&r.m);
+			else
+				motion_stop(&r.m);
+			int n = 0;
+			while (n < 5000 && (r.u1[0] != 0 || r.u1[1] != 0 || r.a1[0] != 0)) {
+				jrig_tick(&r);
+				n++;
+			}
+			assert_true(n < 5000);
+			for (int i = 0; i < 2; i++) {
+				assert_true(r.amax[i] <= r.m.amax_t_pt2);
+				assert_true(r.jmax[i] <= r.m.jmax_t_pt3);
+			}
+			/* It reached the acceleration limit while braking (on the
+			 * mecanum base its axis's share, 1 / sqrt(2)). */
+			q32_t reach = k ? r.m.amax_t_pt2 / 10000 * 7070 : r.m.amax_t_pt2 / 100 * 99;
+			assert_true(r.amax[0] >= reach);
+			if (!pause) {
+				jrig_tick(&r);
+				assert_false(motion_has_work(&r.m));
+				continue;
+			}
+			motion_resume(&r.m);
+			jrig_reset_peaks(&r);
+			int spin;
+			run_goal(&r, 20000, &spin);
+			assert_int_equal(r.m.ref.x_mm, g.x_mm);
+			assert_int_equal(r.m.ref.y_mm, 0);
+			assert_within_set(&r);
+		}
+}
+
 /* A continuous goal cut short by the drives' halt (estop, a fault, servo
  * off) while accelerating: the next goal starts from rest with zero
  * acceleration, its first change of speed at most the jerk. */
@@ -964,6 +1014,7 @@ int main(void)
 	    cmocka_unit_test(test_continuous_s_curve),
 	    cmocka_unit_test(test_continuous_retarget),
 	    cmocka_unit_test(test_continuous_after_halt),
+	    cmocka_unit_test(test_continuous_stop_and_pause),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }
