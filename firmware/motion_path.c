@@ -534,7 +534,8 @@ static bool plan_line(motion_t *m, q32_t rem, q32_t cout)
  * acceleration to zero at the jerk, then the line from that speed (traj.h,
  * section 6); in the last ramp to rest, whose speeds only fall, or in a
  * corner held at its speed, it brakes at the limits if it is above the new
- * one (and plans again at rest). Raised, the line from the speed held
+ * one (and plans again at rest); in the last ramp into a corner the ramp
+ * runs on to the corner's speed and the corner brakes. Raised, the line from the speed held
  * (zero acceleration: nothing steps) is planned at once; accelerating or
  * slowing, the profile runs on until it holds. */
 static void plan_new_limit(motion_t *m)
@@ -545,11 +546,14 @@ static void plan_new_limit(motion_t *m)
 		return;
 	}
 	const traj_ln_t *ln = ln_run(m);
-	bool last_ramp =
-	    m->sc_on ? m->sc.k >= m->sc.nv : ln->k > ln->l1 + ln->hold && ln->cout == 0;
+	bool last_ramp = m->sc_on ? m->sc.k >= m->sc.nv : ln->k > ln->l1 + ln->hold;
 	q32_t top = m->sc_on ? m->sc.vm : fx_max64(ln->w, m->v);
 	if (last_ramp) {
-		if (m->v >= m->lim_vmax)
+		/* Into a corner the ramp runs on to the corner's speed, which
+		 * the corner's rotation needs (a glide here would give up the
+		 * braking); the corner brakes to the new limit if it is above
+		 * it (plan_at_speed). */
+		if (m->v >= m->lim_vmax && (m->sc_on || ln->cout == 0))
 			plan_drop(m);
 	} else if (m->lim_vmax <= top || (m->lim_vmax > m->plan_cap && m->acc == 0)) {
 		plan_drop(m);
@@ -636,8 +640,18 @@ static q32_t sc_speed(motion_t *m, bool braking)
 			return blends_onward(m, m->seg.kind) ? m->v + a : fx_min64(m->v + a, rem);
 		}
 		m->glide = false;
-		plan_line(m, rem, piece_cout(m));
-		/* No room for the line: brake, and plan again at rest. */
+		q32_t cout = piece_cout(m);
+		if (!plan_line(m, rem, cout) && blends_onward(m, m->seg.kind) && m->v <= cout) {
+			/* No room for the line into the corner, already at or
+			 * below the corner's speed: the speed holds into the
+			 * corner (braking at the line's limits would overrun
+			 * the corner's share of the rotation's acceleration). */
+			m->hold_on = true;
+			m->hold_v = m->v;
+			m->plan_cap = m->lim_vmax;
+			return m->v;
+		}
+		/* No room for the line to rest: brake, and plan again at rest. */
 	}
 	if (braking || (!m->sc_on && !m->ln_on && m->v > 0)) {
 		q32_t v = m->v, amax = piece_limit(&m->seg, m->amax_t_pt2, m->amax_r_pt2);
