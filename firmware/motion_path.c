@@ -581,6 +581,23 @@ void motion_line_glide(motion_t *m)
 	m->glide = true;
 }
 
+/* A waypoint queued later can lower the speed of the corner the running
+ * line brakes into (the line after it is short, the corner after that
+ * sharp). The line's plan still ends at the old speed: it glides and plans
+ * again from its speed; in its last ramp, which cannot turn round, it
+ * brakes at the limits (and plans again at rest). */
+void motion_line_cout_check(motion_t *m)
+{
+	const traj_ln_t *ln = ln_run(m);
+	if (m->mode != MODE_PATH || m->seg.kind != SEG_LINE || !m->ln_on || m->lim_j == 0 ||
+	    ln->cout <= piece_cout(m))
+		return;
+	if (ln->k <= ln->l1 + ln->hold)
+		motion_line_glide(m);
+	else
+		plan_drop(m);
+}
+
 /* A piece begun at speed (a cruise line or corner, under jerk limits): a
  * corner holds the speed it is entered at (its rotation is the clothoid's),
  * a line runs from it to its corner's speed (traj.h, section 6). */

@@ -102,6 +102,8 @@ static void pass_walk(motion_t *m, int i, uint8_t lo, q32_t next_v, q32_t next_e
 		next_extra = c->line_extra_mm;
 	}
 	m->pass_todo = 0;
+	if (ONLINE_JERK)
+		motion_line_cout_check(m);
 }
 
 /* Lower each corner's speed so the unit can brake to the next corner's speed

@@ -96,6 +96,9 @@ static inline bool twist_zero(const fx_twist_t *t)
  * and the glide's start. */
 bool motion_line_may_blend(const motion_t *m);
 void motion_line_glide(motion_t *m);
+/* After the backward pass: a jerk-limited line running into its corner
+ * whose speed the pass lowered plans again. */
+void motion_line_cout_check(motion_t *m);
 
 /* motion_seek.c: the continuous goal's tick under jerk limits, and its
  * retarget (a new goal). */

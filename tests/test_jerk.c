@@ -877,6 +877,35 @@ static void test_waypoint_queued_on_a_planned_line(void **state)
 	}
 }
 
+/* A waypoint queued while a cruise line runs on its plan into a gentle
+ * corner can lower that corner's speed: the line after it is short (25 mm)
+ * and ends in a right angle. The running line plans again (it glides, then
+ * runs to the lower speed): the right angle is entered within its rotation
+ * cap, every tick within the acceleration limits, and the route lands on
+ * its last waypoint. */
+static void test_corner_speed_lowered_under_running_line(void **state)
+{
+	(void)state;
+	jrig_t r;
+	jrig_init(&r, MOTION_KIN_DIFF);
+	assert_true(motion_cruise_abs(&r.m, (q32_t)1000 << 32, 0));
+	assert_true(motion_cruise_abs(&r.m, (q32_t)1400 << 32, (q32_t)2 << 32));
+	for (int i = 0; i < 300; i++)
+		jrig_tick(&r);
+	assert_true(r.m.ln_on);
+	q32_t before = r.m.lnb[r.m.ln_i].cout;
+	assert_true(motion_cruise_abs(&r.m, (q32_t)1425 << 32, (q32_t)2 << 32));
+	assert_true(motion_cruise_abs(&r.m, (q32_t)1425 << 32, (q32_t)400 << 32));
+	jrig_tick(&r);
+	assert_true(r.m.glide || r.m.lnb[r.m.ln_i].cout < before);
+	jrig_run(&r, 40000);
+	assert_int_equal(r.m.ref.x_mm, (q32_t)1425 << 32);
+	assert_int_equal(r.m.ref.y_mm, (q32_t)400 << 32);
+	assert_true(r.amax[0] <= r.m.amax_t_pt2);
+	assert_true(r.amax[2] <= r.m.amax_r_pt2);
+	assert_true(r.jmax[0] <= r.m.jmax_t_pt3);
+}
+
 /* A blended cruise route under jerk limits: 1000 mm out, 1000 mm across,
  * 1000 mm back, 700 mm down (three 90 degree corners, 200 mm blends). The
  * lines run between the corner speeds on traj_ln's ramps and the corners
@@ -1006,6 +1035,7 @@ int main(void)
 	    cmocka_unit_test(test_omni_jog_vector_limits),
 	    cmocka_unit_test(test_jerk_fits),
 	    cmocka_unit_test(test_waypoint_queued_on_a_planned_line),
+	    cmocka_unit_test(test_corner_speed_lowered_under_running_line),
 	    cmocka_unit_test(test_new_speed_while_accelerating),
 	    cmocka_unit_test(test_new_speed_glides),
 	    cmocka_unit_test(test_cruise_s_curve),
