@@ -612,6 +612,40 @@ static void plan_at_speed(motion_t *m, q32_t rem)
 	plan_line(m, rem, piece_cout(m));
 }
 
+/* A glide's tick (sc_speed): the acceleration to zero at the jerk, then
+ * the line from that speed to the piece's end speed. True with the speed
+ * in *u, false when no line fits and the piece must brake. */
+static bool glide_step(motion_t *m, q32_t rem, q32_t *u)
+{
+	if (m->acc != 0) {
+		/* Below the profile's speeds, so braking still fits. */
+		q32_t a =
+		    m->acc > 0 ? fx_max64(m->acc - m->lim_j, 0) : fx_min64(m->acc + m->lim_j, 0);
+		m->acc = a;
+		/* Short of a stop, the step may cross into the corner. */
+		*u = blends_onward(m, m->seg.kind) ? m->v + a : fx_min64(m->v + a, rem);
+		return true;
+	}
+	m->glide = false;
+	q32_t cout = piece_cout(m);
+	if (plan_line(m, rem, cout)) {
+		*u = traj_ln_next(ln_run(m));
+		m->acc = *u - m->v;
+		return true;
+	}
+	if (!blends_onward(m, m->seg.kind) || m->v > cout)
+		return false;
+	/* No room for the line into the corner, already at or below the
+	 * corner's speed: the speed holds into the corner (braking at the
+	 * line's limits would overrun the corner's share of the rotation's
+	 * acceleration). */
+	m->hold_on = true;
+	m->hold_v = m->v;
+	m->plan_cap = m->lim_vmax;
+	*u = m->v;
+	return true;
+}
+
 /* A piece under a jerk limit. From rest to rest it runs on the planned
  * S-curve (traj.h, section 4) over what is left of it; a cruise line runs
  * from its speed to its corner's (section 6), and a corner holds its
@@ -647,27 +681,9 @@ static q32_t sc_speed(motion_t *m, bool braking)
 		return m->hold_v;
 	}
 	if (ONLINE_JERK && m->glide) {
-		if (m->acc != 0) {
-			/* The acceleration to zero at the jerk: below the
-			 * profile's speeds, so braking still fits. */
-			q32_t a = m->acc > 0 ? fx_max64(m->acc - m->lim_j, 0)
-					     : fx_min64(m->acc + m->lim_j, 0);
-			m->acc = a;
-			/* Short of a stop, the step may cross into the corner. */
-			return blends_onward(m, m->seg.kind) ? m->v + a : fx_min64(m->v + a, rem);
-		}
-		m->glide = false;
-		q32_t cout = piece_cout(m);
-		if (!plan_line(m, rem, cout) && blends_onward(m, m->seg.kind) && m->v <= cout) {
-			/* No room for the line into the corner, already at or
-			 * below the corner's speed: the speed holds into the
-			 * corner (braking at the line's limits would overrun
-			 * the corner's share of the rotation's acceleration). */
-			m->hold_on = true;
-			m->hold_v = m->v;
-			m->plan_cap = m->lim_vmax;
-			return m->v;
-		}
+		q32_t u;
+		if (glide_step(m, rem, &u))
+			return u;
 		/* No room for the line to rest: brake, and plan again at rest. */
 	}
 	if (braking || (!m->sc_on && !m->ln_on && m->v > 0)) {
