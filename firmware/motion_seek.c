@@ -170,9 +170,9 @@ static bool seek_axis(motion_t *m, int i, q32_t *v, q32_t *acc, q32_t d, const s
 static seek_lim_t lim_t(const motion_t *m, q32_t vc, bool share)
 {
 	q32_t a = m->a_t_pt2, j = jerk_or(m->j_t_pt3, a);
-	if (share) {
-		a = half2(a);
-		j = half2(j);
+	if (share) { /* at least a raw unit: the laws divide by them */
+		a = fx_max64(half2(a), 1);
+		j = fx_max64(half2(j), 1);
 	}
 	return (seek_lim_t){vc, a, j, m->sk_dip[0]};
 }
@@ -190,8 +190,8 @@ static void seek_brake(motion_t *m, fx_twist_t *vel, fx_twist_t *acc)
 	q32_t ar = m->amax_r_pt2, jr = jerk_or(m->jmax_r_pt3, ar);
 	m->sk_on[0] = m->sk_on[1] = false;
 	if (m->p.kin == MOTION_KIN_OMNI) {
-		at = half2(at);
-		jt = half2(jt);
+		at = fx_max64(half2(at), 1);
+		jt = fx_max64(half2(jt), 1);
 		for (int i = 0; i < 2; i++)
 			traj_jslew(&m->sk_v[i], &m->sk_a[i], 0, at, jt);
 	} else {

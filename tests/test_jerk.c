@@ -804,6 +804,24 @@ static void test_continuous_stop_and_pause(void **state)
 		}
 }
 
+/* The smallest acceleration there is (one raw unit a tick^2): a mecanum
+ * axis's share of it is still one raw unit, not zero (the law divides by
+ * it: found by fuzz_ops). The goal moves off at that rate. */
+static void test_continuous_smallest_rate(void **state)
+{
+	(void)state;
+	jrig_t r;
+	jrig_init(&r, MOTION_KIN_OMNI);
+	motion_set_accel(&r.m, 1, 1);
+	assert_int_equal(r.m.a_t_pt2, 1);
+	fx_pose_t g = {(q32_t)1 << 32, 0, 0};
+	assert_true(motion_continuous_rel(&r.m, &g));
+	for (int i = 0; i < 1000; i++)
+		jrig_tick(&r);
+	assert_true(r.m.ref.x_mm > 0);
+	assert_true(r.amax[0] <= 1);
+}
+
 /* A continuous goal cut short by the drives' halt (estop, a fault, servo
  * off) while accelerating: the next goal starts from rest with zero
  * acceleration, its first change of speed at most the jerk. */
@@ -1044,6 +1062,7 @@ int main(void)
 	    cmocka_unit_test(test_continuous_s_curve),
 	    cmocka_unit_test(test_continuous_retarget),
 	    cmocka_unit_test(test_continuous_after_halt),
+	    cmocka_unit_test(test_continuous_smallest_rate),
 	    cmocka_unit_test(test_continuous_stop_and_pause),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
