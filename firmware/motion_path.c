@@ -538,6 +538,14 @@ static bool plan_line(motion_t *m, q32_t rem, q32_t cout)
  * runs on to the corner's speed and the corner brakes. Raised, the line from the speed held
  * (zero acceleration: nothing steps) is planned at once; accelerating or
  * slowing, the profile runs on until it holds. */
+/* Whether the running plan is in its last ramp (the S-curve's, or the
+ * line's into its end speed), where its speed only falls. */
+static bool last_ramp(const motion_t *m)
+{
+	const traj_ln_t *ln = &m->lnb[m->ln_i];
+	return m->sc_on ? m->sc.k >= m->sc.nv : ln->k > ln->l1 + ln->hold;
+}
+
 static void plan_new_limit(motion_t *m)
 {
 	if (m->hold_on) {
@@ -546,9 +554,8 @@ static void plan_new_limit(motion_t *m)
 		return;
 	}
 	const traj_ln_t *ln = ln_run(m);
-	bool last_ramp = m->sc_on ? m->sc.k >= m->sc.nv : ln->k > ln->l1 + ln->hold;
 	q32_t top = m->sc_on ? m->sc.vm : fx_max64(ln->w, m->v);
-	if (last_ramp) {
+	if (last_ramp(m)) {
 		/* Into a corner the ramp runs on to the corner's speed, which
 		 * the corner's rotation needs (a glide here would give up the
 		 * braking); the corner brakes to the new limit if it is above
@@ -569,10 +576,7 @@ static void plan_new_limit(motion_t *m)
  * fitted then). */
 bool motion_line_may_blend(const motion_t *m)
 {
-	const traj_ln_t *ln = &m->lnb[m->ln_i];
-	if (m->sc_on)
-		return m->sc.k < m->sc.nv;
-	return m->ln_on && ln->k <= ln->l1 + ln->hold;
+	return (m->sc_on || m->ln_on) && !last_ramp(m);
 }
 
 void motion_line_glide(motion_t *m)
@@ -592,10 +596,10 @@ void motion_line_cout_check(motion_t *m)
 	if (m->mode != MODE_PATH || m->seg.kind != SEG_LINE || !m->ln_on || m->lim_j == 0 ||
 	    ln->cout <= piece_cout(m))
 		return;
-	if (ln->k <= ln->l1 + ln->hold)
-		motion_line_glide(m);
-	else
+	if (last_ramp(m))
 		plan_drop(m);
+	else
+		motion_line_glide(m);
 }
 
 /* A piece begun at speed (a cruise line or corner, under jerk limits): a

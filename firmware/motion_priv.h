@@ -74,6 +74,34 @@ static inline __attribute__((always_inline)) void pop(motion_t *m)
 	limits_changed(m);
 }
 
+/* x / sqrt(2) rounded down, for x >= 0 of any size (split in two so that
+ * no product passes 2^62): a mecanum base's translation axes each get this
+ * share of the limits under a jerk limit, so that the vector never exceeds
+ * them. 2^30 / sqrt(2) rounded down is 759250124. */
+static inline q32_t motion_share(q32_t x)
+{
+	const int64_t k = 759250124, lo = x & ((1 << 30) - 1);
+	return (x >> 30) * k + ((lo * k) >> 30);
+}
+
+/* Toward a continuous goal on a differential base at bearing error *e:
+ * forward or backing, whichever faces it (a goal that falls behind is
+ * reached by backing along the line, not by circling it; the 20 degree
+ * band about the side keeps the choice from chattering); *e becomes the
+ * error of the direction chosen. True when the direction changed. */
+static inline bool motion_goal_facing(motion_t *m, q32_t *e)
+{
+	bool rev = m->goal_reverse;
+	q32_t ae = fx_abs64(*e);
+	if (!rev && ae > fx_from_int(100))
+		m->goal_reverse = true;
+	else if (rev && ae < fx_from_int(80))
+		m->goal_reverse = false;
+	if (m->goal_reverse)
+		*e = fx_wrap_deg(*e + fx_from_int(180));
+	return rev != m->goal_reverse;
+}
+
 /* The jerk-limited line running, and the one planned ahead (motion.h):
  * taking the plan made ahead swaps them, with no copy in the tick. */
 static inline traj_ln_t *ln_run(motion_t *m)

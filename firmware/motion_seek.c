@@ -38,11 +38,19 @@
  * while its translation runs. */
 #define NEAR_MM ((q32_t)1 << 32)
 
-/* 2^30 / sqrt(2), rounded down (motion_vel.c's share, for the limits). */
-static q32_t half2(q32_t x)
+/* A mecanum base's axes (Q30 cosine c and sine s of the bearing in the
+ * body frame): a body vector (x, y) onto them, and back. */
+static inline void to_axes(q32_t x, q32_t y, int32_t c, int32_t s, q32_t *u, q32_t *n)
 {
-	const int64_t k = 759250124, lo = x & ((1 << 30) - 1);
-	return (x >> 30) * k + ((lo * k) >> 30);
+	*u = fx_mul_q30(x, c) + fx_mul_q30(y, s);
+	*n = fx_mul_q30(y, c) - fx_mul_q30(x, s);
+}
+
+static inline void from_axes(const motion_t *m, fx_twist_t *vel)
+{
+	int32_t c = m->sk_c, s = m->sk_s;
+	vel->vx_pt = fx_mul_q30(m->sk_v[0], c) - fx_mul_q30(m->sk_v[1], s);
+	vel->vy_pt = fx_mul_q30(m->sk_v[0], s) + fx_mul_q30(m->sk_v[1], c);
 }
 
 /* A jerk of 0 (unlimited on that axis): one that lets the acceleration
@@ -171,8 +179,8 @@ static seek_lim_t lim_t(const motion_t *m, q32_t vc, bool share)
 {
 	q32_t a = m->a_t_pt2, j = jerk_or(m->j_t_pt3, a);
 	if (share) { /* at least a raw unit: the laws divide by them */
-		a = fx_max64(half2(a), 1);
-		j = fx_max64(half2(j), 1);
+		a = fx_max64(motion_share(a), 1);
+		j = fx_max64(motion_share(j), 1);
 	}
 	return (seek_lim_t){vc, a, j, m->sk_dip[0]};
 }
@@ -190,8 +198,8 @@ static void seek_brake(motion_t *m, fx_twist_t *vel, fx_twist_t *acc)
 	q32_t ar = m->amax_r_pt2, jr = jerk_or(m->jmax_r_pt3, ar);
 	m->sk_on[0] = m->sk_on[1] = false;
 	if (m->p.kin == MOTION_KIN_OMNI) {
-		at = fx_max64(half2(at), 1);
-		jt = fx_max64(half2(jt), 1);
+		at = fx_max64(motion_share(at), 1);
+		jt = fx_max64(motion_share(jt), 1);
 		for (int i = 0; i < 2; i++)
 			traj_jslew(&m->sk_v[i], &m->sk_a[i], 0, at, jt);
 	} else {
@@ -204,19 +212,9 @@ static void seek_brake(motion_t *m, fx_twist_t *vel, fx_twist_t *acc)
  * (the direction chosen as the acceleration-limited law chooses it). */
 static void seek_diff(motion_t *m, q32_t e, q32_t dist, fx_twist_t *vel, fx_twist_t *acc)
 {
-	q32_t ae = fx_abs64(e);
-	bool rev = m->goal_reverse;
-	if (!m->goal_reverse && ae > fx_from_int(100))
-		m->goal_reverse = true;
-	else if (m->goal_reverse && ae < fx_from_int(80))
-		m->goal_reverse = false;
-	if (rev != m->goal_reverse)
+	if (motion_goal_facing(m, &e))
 		m->sk_on[0] = false; /* the tail ran the other way */
-	if (m->goal_reverse) {
-		e = fx_wrap_deg(e + fx_from_int(180));
-		ae = fx_abs64(e);
-	}
-	q32_t dir = m->goal_reverse ? -1 : 1;
+	q32_t ae = fx_abs64(e), dir = m->goal_reverse ? -1 : 1;
 	/* Along the heading to the goal's projection on it; off by more than
 	 * 45 degrees, no translation: to rest while the turn comes round. */
 	q32_t proj = fx_mul_q30(dist, fx_cos_bam(fx_deg_to_bam(e)));
@@ -246,26 +244,21 @@ static void seek_diff(motion_t *m, q32_t e, q32_t dist, fx_twist_t *vel, fx_twis
 }
 
 /* Mecanum base: the goal dx, dy away in the body frame, on the axes of the
- * bearing seen at the last retarget. */
+ * bearing seen at the last retarget (the caller forms the body twist). */
 static void seek_omni(motion_t *m, q32_t dx, q32_t dy, fx_twist_t *vel, fx_twist_t *acc)
 {
-	int32_t c = m->sk_c, s = m->sk_s;
-	q32_t du = fx_mul_q30(dx, c) + fx_mul_q30(dy, s);
-	q32_t dn = fx_mul_q30(dy, c) - fx_mul_q30(dx, s);
-	q32_t vc = vt_eff(m);
+	q32_t du, dn, vc = vt_eff(m);
+	to_axes(dx, dy, m->sk_c, m->sk_s, &du, &dn);
 	/* Across the line as well (the retarget left motion across it, or
 	 * the pose moved off it): each axis within 1 / sqrt(2) of the speed
 	 * too. Less than the landing's tolerance off it is not motion. */
 	bool across = m->sk_v[1] | m->sk_a[1] | m->sk_on[1] || dn >= LAND_MM || dn <= -LAND_MM;
 	if (across)
-		vc = half2(vc);
+		vc = motion_share(vc);
 	seek_lim_t l = lim_t(m, vc, true);
 	bool planned = seek_axis(m, 0, &m->sk_v[0], &m->sk_a[0], du, &l, true);
 	if (across)
 		seek_axis(m, 1, &m->sk_v[1], &m->sk_a[1], dn, &l, !planned);
-	vel->vx_pt = fx_mul_q30(m->sk_v[0], c) - fx_mul_q30(m->sk_v[1], s);
-	vel->vy_pt = fx_mul_q30(m->sk_v[0], s) + fx_mul_q30(m->sk_v[1], c);
-	acc->vx_pt = acc->vy_pt = 0; /* set by the caller from the twist */
 	seek_lim_t lr = lim_r(m);
 	traj_jslew(&vel->w_pt, &acc->w_pt, 0, lr.a, lr.j);
 }
@@ -278,8 +271,6 @@ void motion_seek_retarget(motion_t *m)
 	m->ln_next = LN_NEXT_NONE; /* the line buffers serve the tails now */
 	/* The dips' bound (stop_room) for a tick's distance at the limit. */
 	bool omni = m->p.kin == MOTION_KIN_OMNI;
-	m->sk_dip[0] = 0;
-	m->sk_dip[1] = 0;
 	seek_lim_t lt = lim_t(m, 0, omni), lr = lim_r(m);
 	m->sk_dip[0] = traj_sc_ticks_bound(m->vmax_t_pt, lt.a, lt.j);
 	m->sk_dip[1] = traj_sc_ticks_bound(m->vmax_r_pt, lr.a, lr.j);
@@ -294,11 +285,8 @@ void motion_seek_retarget(motion_t *m)
 	}
 	m->sk_c = c;
 	m->sk_s = s;
-	const fx_twist_t *v = &m->vel, *a = &m->vacc;
-	m->sk_v[0] = fx_mul_q30(v->vx_pt, c) + fx_mul_q30(v->vy_pt, s);
-	m->sk_v[1] = fx_mul_q30(v->vy_pt, c) - fx_mul_q30(v->vx_pt, s);
-	m->sk_a[0] = fx_mul_q30(a->vx_pt, c) + fx_mul_q30(a->vy_pt, s);
-	m->sk_a[1] = fx_mul_q30(a->vy_pt, c) - fx_mul_q30(a->vx_pt, s);
+	to_axes(m->vel.vx_pt, m->vel.vy_pt, c, s, &m->sk_v[0], &m->sk_v[1]);
+	to_axes(m->vacc.vx_pt, m->vacc.vy_pt, c, s, &m->sk_a[0], &m->sk_a[1]);
 }
 
 /* The goal heading once the position is reached: the rotation axis's
@@ -335,12 +323,8 @@ void motion_seek_tick(motion_t *m, fx_twist_t *out)
 		q32_t e = fx_wrap_deg(fx_atan2_deg(wy, wx) - m->ref.th_deg);
 		seek_diff(m, e, dist, &vel, &acc);
 	}
-	if (omni && braking) {
-		int32_t c = m->sk_c, s = m->sk_s;
-		vel.vx_pt = fx_mul_q30(m->sk_v[0], c) - fx_mul_q30(m->sk_v[1], s);
-		vel.vy_pt = fx_mul_q30(m->sk_v[0], s) + fx_mul_q30(m->sk_v[1], c);
-	}
-	if (omni) {
+	if (omni) { /* the translation is on the axes */
+		from_axes(m, &vel);
 		acc.vx_pt = vel.vx_pt - m->vel.vx_pt;
 		acc.vy_pt = vel.vy_pt - m->vel.vy_pt;
 	}

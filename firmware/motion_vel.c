@@ -116,19 +116,6 @@ static void slew_rates(const motion_t *m, bool braking, q32_t *at, q32_t *ar)
 	}
 }
 
-/* 2^30 / sqrt(2), rounded down: an omni base's translation axes each get
- * this share of the limits under a jerk limit, so that the vector never
- * exceeds them. */
-#define INV_SQRT2_Q30 ((int32_t)759250124)
-
-/* x / sqrt(2) rounded down, for x >= 0 of any size (split in two so that
- * no product passes 2^62). */
-static q32_t share(q32_t x)
-{
-	const int64_t k = INV_SQRT2_Q30, lo = x & ((1 << 30) - 1);
-	return (x >> 30) * k + ((lo * k) >> 30);
-}
-
 /* Jerk-limited slew of the velocity modes (traj.h, section 5), per axis:
  * the jerks (set ones, or the limits braking) for translation and rotation,
  * 0 for an axis without one (the acceleration-limited slew). */
@@ -137,8 +124,8 @@ static void jerk_slew(motion_t *m, const fx_twist_t *tgt, q32_t at, q32_t ar, bo
 	q32_t jt = braking ? m->jmax_t_pt3 : m->j_t_pt3;
 	q32_t jr = braking ? m->jmax_r_pt3 : m->j_r_pt3;
 	if (jt > 0 && m->p.kin == MOTION_KIN_OMNI) {
-		at = share(at);
-		jt = share(jt);
+		at = motion_share(at);
+		jt = motion_share(jt);
 		traj_jslew(&m->vel.vy_pt, &m->vacc.vy_pt, tgt->vy_pt, at, jt);
 	}
 	if (jt > 0)
@@ -200,22 +187,12 @@ void motion_velocity_tick(motion_t *m, fx_twist_t *out)
 	}
 }
 
-/* Toward the goal on a differential base, heading error e: drive forward
- * or backward, whichever faces the goal: a goal that falls behind (a
- * retarget inside the stopping distance, an overshoot) is reached by
- * backing along the line, not by turning round at speed and circling it.
- * The 20 degree band about the side keeps the choice from chattering. */
+/* Toward the goal on a differential base, heading error e, forward or
+ * backing (motion_goal_facing). */
 static void goal_want_diff(motion_t *m, q32_t e, q32_t dist, fx_twist_t *want)
 {
+	motion_goal_facing(m, &e);
 	q32_t ae = fx_abs64(e);
-	if (!m->goal_reverse && ae > fx_from_int(100))
-		m->goal_reverse = true;
-	else if (m->goal_reverse && ae < fx_from_int(80))
-		m->goal_reverse = false;
-	if (m->goal_reverse) {
-		e = fx_wrap_deg(e + fx_from_int(180));
-		ae = fx_abs64(e);
-	}
 	/* Turn toward the goal; translate along the projected distance. */
 	q32_t wr = fx_min64(traj_umax(ae, m->a_r_pt2), m->v_r_pt);
 	want->w_pt = e < 0 ? -wr : wr;

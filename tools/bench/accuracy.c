@@ -212,21 +212,26 @@ static void single_moves(const char *sfx, const char *at)
 	run(name, what, (pt_t){1000, 1000, 90});
 }
 
+/* The 10-waypoint route of tools/bench/rig.c, at the jerk set. */
+static void route(const char *name, const char *what)
+{
+	setup();
+	for (int i = 0; i < ROUTE_N; i++)
+		if (!motion_cruise_abs(&eng, q(route_mm[i][0]), q(route_mm[i][1])))
+			fail(name);
+	if (!ref_cruise(&ref, route_mm, ROUTE_N))
+		fail("reference route");
+	double hl = atan2(route_mm[ROUTE_N - 1][1] - route_mm[ROUTE_N - 2][1],
+			  route_mm[ROUTE_N - 1][0] - route_mm[ROUTE_N - 2][0]) *
+		    180 / M_PI;
+	run(name, what, (pt_t){route_mm[ROUTE_N - 1][0], route_mm[ROUTE_N - 1][1], hl});
+}
+
 int main(void)
 {
 	single_moves("", "");
 
-	setup();
-	for (int i = 0; i < ROUTE_N; i++)
-		if (!motion_cruise_abs(&eng, q(route_mm[i][0]), q(route_mm[i][1])))
-			fail("cruise");
-	if (!ref_cruise(&ref, route_mm, ROUTE_N))
-		fail("reference cruise");
-	double hl = atan2(route_mm[ROUTE_N - 1][1] - route_mm[ROUTE_N - 2][1],
-			  route_mm[ROUTE_N - 1][0] - route_mm[ROUTE_N - 2][0]) *
-		    180 / M_PI;
-	run("cruise", "10-waypoint moveCruiseAbs route (tools/bench/rig.c)",
-	    (pt_t){route_mm[ROUTE_N - 1][0], route_mm[ROUTE_N - 1][1], hl});
+	route("cruise", "10-waypoint moveCruiseAbs route (tools/bench/rig.c)");
 
 	/* The jerk-limited S-curve (traj.h, section 4) against the reference's
 	 * own search and counting. */
@@ -236,14 +241,7 @@ int main(void)
 
 	/* The blended cruise under jerk limits: lines between the corner
 	 * speeds (traj.h section 6), corners holding theirs. */
-	setup();
-	for (int i = 0; i < ROUTE_N; i++)
-		if (!motion_cruise_abs(&eng, q(route_mm[i][0]), q(route_mm[i][1])))
-			fail("cruise_jerk");
-	if (!ref_cruise(&ref, route_mm, ROUTE_N))
-		fail("reference cruise_jerk");
-	run("cruise_jerk", "10-waypoint moveCruiseAbs route, jerk 2000 mm/s^3, 1000 deg/s^3",
-	    (pt_t){route_mm[ROUTE_N - 1][0], route_mm[ROUTE_N - 1][1], hl});
+	route("cruise_jerk", "10-waypoint moveCruiseAbs route, jerk 2000 mm/s^3, 1000 deg/s^3");
 
 	/* The continuous goal's online law (motion_seek.c) from rest against
 	 * the reference's time-optimal S-curve over the same 1000 mm: how far
