@@ -1,20 +1,28 @@
 /* Configuration defaults and validation, from the table of
  * config_fields.def.
  *
- * Runs once at init, before anything moves; it is the only firmware code
- * besides vs_api.c that touches doubles (soft-float is fine here). Every
+ * Runs once at init, before anything moves. With vs_api.c it is the only
+ * firmware code that computes with vs_real_t (real.h): doubles on a host
+ * (soft-float is fine here), Q32 on a board built with VS_REAL_Q32. Every
  * range test is written so that NaN fails it too.
  */
 #include <stddef.h>
 
 #include "config.h"
+#include "fx.h"
 
 /* The C type of each row type. */
-#define VS_CFG_CTYPE_DOUBLE double
+#define VS_CFG_CTYPE_DOUBLE vs_real_t
 #define VS_CFG_CTYPE_U32    uint32_t
 #define VS_CFG_CTYPE_U16    uint16_t
 #define VS_CFG_CTYPE_BOOL   bool
 #define VS_CFG_CTYPE_KIN    vs_kinematics_t
+/* A row's constant (default or bound) in its member's type. */
+#define VS_CFG_CONST_DOUBLE(x) VS_REAL(x)
+#define VS_CFG_CONST_U32(x)    (x)
+#define VS_CFG_CONST_U16(x)    (x)
+#define VS_CFG_CONST_BOOL(x)   (x)
+#define VS_CFG_CONST_KIN(x)    (x)
 /* Element k of row member m of type t in configuration c (const: CELEM). */
 #define ELEM(c, m, t, k)  (((VS_CFG_CTYPE_##t *)(void *)&(c)->m)[k])
 #define CELEM(c, m, t, k) (((const VS_CFG_CTYPE_##t *)(const void *)&(c)->m)[k])
@@ -34,6 +42,7 @@ const vs_config_field_t vs_config_fields[VS_CONFIG_NFIELDS] = {VS_CONFIG_FIELDS(
 #undef ROW
 
 /* Element k of row f's member, as the given type. */
+#ifndef VS_REAL_Q32
 #define AT(type)  (((type *)(void *)((char *)c + f->off))[k])
 #define CAT(type) (((const type *)(const void *)((const char *)c + f->off))[k])
 
@@ -75,6 +84,7 @@ void vs_config_set(vs_config_t *c, const vs_config_field_t *f, unsigned k, doubl
 }
 #undef AT
 #undef CAT
+#endif
 
 /* io.xml of the reference base: two inputs, two outputs. */
 static void default_io(vs_config_t *c)
@@ -116,26 +126,26 @@ void vs_config_defaults(vs_config_t *c)
 	 * vs_config_check. */
 #define SET_DEFAULT(m, n, t, d, ...)                                                               \
 	for (unsigned k = 0; k < (n); k++)                                                         \
-		ELEM(c, m, t, k) = (VS_CFG_CTYPE_##t)(d);
+		ELEM(c, m, t, k) = (VS_CFG_CTYPE_##t)VS_CFG_CONST_##t(d);
 	VS_CONFIG_FIELDS(SET_DEFAULT)
 #undef SET_DEFAULT
 	c->firmware_version = NULL;
 	default_io(c);
 }
 
-static bool in_range(double x, double lo, double hi)
+static bool in_range(vs_real_t x, vs_real_t lo, vs_real_t hi)
 {
 	return lo <= x && x <= hi;
 }
 
 /* 0 < x <= hi (NaN fails). */
-static bool positive_upto(double x, double hi)
+static bool positive_upto(vs_real_t x, vs_real_t hi)
 {
-	return x > 0.0 && x <= hi;
+	return x > 0 && x <= hi;
 }
 
 /* lo <= x <= hi, or lo < x <= hi when lo_excl (NaN fails). */
-static inline bool within(double x, double lo, double hi, bool lo_excl)
+static inline bool within(vs_real_t x, vs_real_t lo, vs_real_t hi, bool lo_excl)
 {
 	return (lo_excl ? x > lo : x >= lo) && x <= hi;
 }
@@ -146,7 +156,8 @@ static unsigned first_out_of_range(const vs_config_t *c)
 {
 #define IN_RANGE(m, n, t, d, lo, hi, ex, ...)                                                      \
 	for (unsigned k = 0; k < (n); k++)                                                         \
-		if (!within((double)CELEM(c, m, t, k), (lo), (hi), (ex)))                          \
+		if (!within((vs_real_t)CELEM(c, m, t, k), VS_CFG_CONST_##t(lo),                    \
+			    VS_CFG_CONST_##t(hi), (ex)))                                           \
 			return VS_CONFIG_ROW_##m;
 	VS_CONFIG_FIELDS(IN_RANGE)
 #undef IN_RANGE
@@ -156,15 +167,20 @@ static unsigned first_out_of_range(const vs_config_t *c)
 #define ROW(m) VS_CONFIG_ROW_##m
 #define PI_D   3.14159265358979323846
 
-bool vs_jerk_fits(const vs_config_t *c, double j, double limit)
+bool vs_jerk_fits(const vs_config_t *c, vs_real_t j, vs_real_t limit)
 {
-	double hz = (double)c->tick_hz;
-	if (j == 0.0)
+	if (j == 0)
 		return true;
-	/* At least 64 raw units a tick^3: the profiles keep 4 below the limit
-	 * for rounding (traj.h, section 4). */
-	return j * 4294967296.0 / (hz * hz * hz) >= 64.0 && j <= VS_JERK_MAX &&
-	       (limit == 0.0 || j <= limit);
+		/* At least 64 raw units a tick^3: the profiles keep 4 below the limit
+		 * for rounding (traj.h, section 4). */
+#ifdef VS_REAL_Q32
+	int64_t hz = c->tick_hz; /* <= 10^4: hz^3 * 64 < 2^63 */
+	bool held = j >= 64 * hz * hz * hz;
+#else
+	double hz = (double)c->tick_hz;
+	bool held = j * 4294967296.0 / (hz * hz * hz) >= 64.0;
+#endif
+	return held && j <= VS_REAL(VS_JERK_MAX) && (limit == 0 || j <= limit);
 }
 
 /* Names the field for a report: returns code. */
@@ -182,7 +198,8 @@ static int report(const char **name, const char *field, int code)
  * field, or 0. */
 static int cross_rules(const vs_config_t *c, unsigned bad, const char **name)
 {
-	if (bad > ROW(wheel_base_mm) && c->kinematics == VS_KIN_OMNI && !(c->wheel_base_mm >= 50.0))
+	if (bad > ROW(wheel_base_mm) && c->kinematics == VS_KIN_OMNI &&
+	    !(c->wheel_base_mm >= VS_REAL(50.0)))
 		return report(name, "wheel_base_mm", -1);
 	if (bad >= ROW(vel_default_t_mm_s) &&
 	    !positive_upto(c->vel_default_t_mm_s, c->vel_limit_t_mm_s))
@@ -207,10 +224,10 @@ static int cross_rules(const vs_config_t *c, unsigned bad, const char **name)
 	    !vs_jerk_fits(c, c->jerk_default_r_deg_s3, c->jerk_limit_r_deg_s3))
 		return report(name, "jerk_default_r_deg_s3", -2);
 	/* Per-tick loop gain at most 1/4 keeps the discrete loop well damped. */
-	if (bad > ROW(wheel_kp_per_s) && c->wheel_kp_per_s * 4.0 > (double)c->tick_hz)
+	if (bad > ROW(wheel_kp_per_s) && c->wheel_kp_per_s > vs_real_int(c->tick_hz) / 4)
 		return report(name, "wheel_kp_per_s", -2);
 	if (bad >= ROW(caution_vel_t_mm_s) &&
-	    !in_range(c->caution_vel_t_mm_s, 0.0, c->vel_limit_t_mm_s))
+	    !in_range(c->caution_vel_t_mm_s, 0, c->vel_limit_t_mm_s))
 		return report(name, "caution_vel_t_mm_s", -2);
 	if (bad > ROW(battery_low_v) && !(c->battery_low_v > c->battery_critical_v))
 		return report(name, "battery_low_v", -2);
@@ -222,11 +239,22 @@ static int cross_rules(const vs_config_t *c, unsigned bad, const char **name)
 static bool setpoint_fits(const vs_config_t *c)
 {
 	bool omni = c->kinematics == VS_KIN_OMNI;
+#ifdef VS_REAL_Q32
+	/* The same sum in Q32, against the speed the limit allows: every term
+	 * is bounded by the ranges above (the largest, vel_r * half, 2^56). */
+	q32_t half = (omni ? c->wheel_base_mm + c->track_width_mm : c->track_width_mm) / 2;
+	q32_t counts_per_mm = fx_div(vs_real_int(c->encoder_counts_per_rev),
+				     fx_mul(VS_REAL(PI_D), c->wheel_diameter_mm));
+	q32_t wheel_mm_s = c->vel_limit_t_mm_s * (omni ? 2 : 1) +
+			   fx_mul(fx_mul(c->vel_limit_r_deg_s, half), VS_REAL(PI_D / 180.0));
+	return !(wheel_mm_s > fx_div(VS_REAL(2147483647.0 / 512.0), counts_per_mm));
+#else
 	double counts_per_mm = (double)c->encoder_counts_per_rev / (PI_D * c->wheel_diameter_mm);
 	double half = omni ? (c->wheel_base_mm + c->track_width_mm) / 2.0 : c->track_width_mm / 2.0;
 	double wheel_mm_s =
 	    c->vel_limit_t_mm_s * (omni ? 2.0 : 1.0) + c->vel_limit_r_deg_s * half * PI_D / 180.0;
 	return !(wheel_mm_s * counts_per_mm * 256.0 * 2.0 > 2147483647.0);
+#endif
 }
 
 /* The io.xml entries: 0, or -3 with the field. */

@@ -10,6 +10,8 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "real.h"
+
 #define VS_MAX_AXES    4
 #define VS_MAX_IO      32
 #define VS_IO_NAME_MAX 24
@@ -36,30 +38,30 @@ typedef struct {
 	uint32_t tick_hz; /* control tick rate, 100..10000, default 1000 */
 
 	/* Geometry and sensing. */
-	double wheel_diameter_mm;
-	double track_width_mm;		 /* differential: wheel to wheel; mecanum: left to right */
-	double wheel_base_mm;		 /* mecanum: front to rear axle; unused on differential */
+	vs_real_t wheel_diameter_mm;
+	vs_real_t track_width_mm;	 /* differential: wheel to wheel; mecanum: left to right */
+	vs_real_t wheel_base_mm;	 /* mecanum: front to rear axle; unused on differential */
 	uint32_t encoder_counts_per_rev; /* per wheel revolution, after quadrature */
 
 	/* Limits (getVelocityLimit / getAccelerationLimit) and start-up values. */
-	double vel_limit_t_mm_s, vel_limit_r_deg_s;
-	double acc_limit_t_mm_s2, acc_limit_r_deg_s2;
-	double vel_default_t_mm_s, vel_default_r_deg_s;
-	double acc_default_t_mm_s2, acc_default_r_deg_s2;
+	vs_real_t vel_limit_t_mm_s, vel_limit_r_deg_s;
+	vs_real_t acc_limit_t_mm_s2, acc_limit_r_deg_s2;
+	vs_real_t vel_default_t_mm_s, vel_default_r_deg_s;
+	vs_real_t acc_default_t_mm_s2, acc_default_r_deg_s2;
 	/* Jerk (mm/s^3, deg/s^3), 0 = unlimited: the limit is what stops reach
 	 * their acceleration with, the default what moves run at ($jerk). */
-	double jerk_limit_t_mm_s3, jerk_limit_r_deg_s3;
-	double jerk_default_t_mm_s3, jerk_default_r_deg_s3;
+	vs_real_t jerk_limit_t_mm_s3, jerk_limit_r_deg_s3;
+	vs_real_t jerk_default_t_mm_s3, jerk_default_r_deg_s3;
 	uint16_t jog_timeout_default_ms;
 
 	/* Wheel position loop and supervision. */
-	double wheel_kp_per_s; /* position loop gain, 1/s */
+	vs_real_t wheel_kp_per_s; /* position loop gain, 1/s */
 	/* Per axis: the drive's velocity lag, ms (its first-order time
 	 * constant from setpoint to speed); 0 = follows at once. */
-	double drive_lag_ms[VS_MAX_AXES];
-	double following_error_mm; /* measured vs commanded wheel travel */
-	uint32_t encoder_stuck_ms; /* commanded motion with no encoder change */
-	uint32_t drive_timeout_ms; /* drive replies missing this long: fault */
+	vs_real_t drive_lag_ms[VS_MAX_AXES];
+	vs_real_t following_error_mm; /* measured vs commanded wheel travel */
+	uint32_t encoder_stuck_ms;    /* commanded motion with no encoder change */
+	uint32_t drive_timeout_ms;    /* drive replies missing this long: fault */
 	/* A tick later than its period by more than this: the loop stalled
 	 * (fault 210). Lateness below it is counted, not a fault. */
 	uint32_t loop_late_ms;
@@ -71,20 +73,20 @@ typedef struct {
 	 * within position_window_mm of it (at least one encoder count) for
 	 * position_window_ms; a unit not in position settle_timeout_ms after its
 	 * reference stopped raises warning 154. */
-	double position_window_mm;
+	vs_real_t position_window_mm;
 	uint32_t position_window_ms, settle_timeout_ms;
 
 	/* Cruise blending: how far the curve may start before a waypoint. */
-	double cruise_blend_mm;
+	vs_real_t cruise_blend_mm;
 	/* Caution speed cap while the obstacle-warning input is active (0 = none). */
-	double caution_vel_t_mm_s;
+	vs_real_t caution_vel_t_mm_s;
 
 	/* Battery, in volts. */
-	double battery_low_v, battery_critical_v;
+	vs_real_t battery_low_v, battery_critical_v;
 
 	/* Which optional devices this unit has. */
 	bool has_contact_sensor, has_obstacle_input, has_estop, has_joystick;
-	double joystick_deadband; /* fraction of full scale, 0..0.5 */
+	vs_real_t joystick_deadband; /* fraction of full scale, 0..0.5 */
 
 	const char *firmware_version; /* "Ver.x.y.z"; NULL: built-in */
 
@@ -125,10 +127,13 @@ enum {
 
 extern const vs_config_field_t vs_config_fields[VS_CONFIG_NFIELDS];
 
-/* Element k (< f->n) of row f's member, as a double (a boolean 0 or 1). */
+#ifndef VS_REAL_Q32
+/* Element k (< f->n) of row f's member, as a double (a boolean 0 or 1).
+ * Host only: the XML reader and $config. */
 double vs_config_get(const vs_config_t *c, const vs_config_field_t *f, unsigned k);
 /* Stores v, converted to the member's type, in element k of row f. */
 void vs_config_set(vs_config_t *c, const vs_config_field_t *f, unsigned k, double v);
+#endif
 
 /* Number of wheel axes for a kinematics type. */
 static inline uint8_t vs_config_axes(const vs_config_t *c)
@@ -146,6 +151,6 @@ int vs_config_check(const vs_config_t *c, const char **field);
 #define VS_JERK_MAX 1e7
 /* A jerk j (mm/s^3 or deg/s^3) the profiles can hold at c's tick rate
  * (0, unlimited, always), and within limit unless that is 0. */
-bool vs_jerk_fits(const vs_config_t *c, double j, double limit);
+bool vs_jerk_fits(const vs_config_t *c, vs_real_t j, vs_real_t limit);
 
 #endif

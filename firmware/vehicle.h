@@ -3,9 +3,10 @@
  * The IDL maps to C as: boolean return, in arguments by value, out
  * arguments by pointer, structs as the vs_* types below, strings as
  * NUL-terminated buffers owned by the unit (valid until the next call).
- * Doubles appear only here, at the boundary; vs_api.c converts them once to
- * the fixed-point units the tick uses, and rejects NaN, infinity and values
- * out of range with false and a warning alarm.
+ * Numbers are vs_real_t (real.h: double on a host, Q32 on a board without
+ * an FPU) only here, at the boundary; vs_api.c converts them once to the
+ * fixed-point units the tick uses, and rejects NaN, infinity and values out
+ * of range with false and a warning alarm.
  *
  * Nothing here blocks except vs_setPower (relay settle time, see hal.h);
  * motion happens in vehicle_tick(), one call per control period.
@@ -41,13 +42,13 @@ enum {
 };
 
 typedef struct {
-	double x, y;
+	vs_real_t x, y;
 } vs_point_t;
 typedef struct {
-	double x, y, theta;
+	vs_real_t x, y, theta;
 } vs_position_t;
 typedef struct {
-	double translation, rotation;
+	vs_real_t translation, rotation;
 } vs_velocity_t;
 
 typedef struct vehicle vehicle_t;
@@ -85,17 +86,17 @@ void vehicle_set_link_timeout(vehicle_t *v, uint32_t ms);
  * configuration's defaults; the set form ($jerk) takes values that fit
  * (vs_jerk_fits: within the limits, held at the tick rate) and refuses
  * others, changing nothing. A piece under way keeps its profile. */
-void vehicle_jerk(const vehicle_t *v, double *jt, double *jr);
-bool vehicle_set_jerk(vehicle_t *v, double jt, double jr);
+void vehicle_jerk(const vehicle_t *v, vs_real_t *jt, vs_real_t *jr);
+bool vehicle_set_jerk(vehicle_t *v, vs_real_t jt, vs_real_t jr);
 
 /* The operations, in spec order. */
 bool vs_clearAlarm(vehicle_t *v);
-bool vs_getAccelerationLimit(vehicle_t *v, double *accLimitT, double *accLimitR);
+bool vs_getAccelerationLimit(vehicle_t *v, vs_real_t *accLimitT, vs_real_t *accLimitR);
 /* activeAlarms has room for max(numOfAlarm, 0) entries (the caller's
  * buffer); *len receives how many were written. */
 bool vs_getActiveAlarm(vehicle_t *v, int16_t numOfAlarm, int16_t *numOfActiveAlarm,
 		       vs_alarm_t *activeAlarms, uint16_t *len);
-bool vs_getBatteryVoltage(vehicle_t *v, double *voltage);
+bool vs_getBatteryVoltage(vehicle_t *v, vs_real_t *voltage);
 bool vs_getDefaultAcceleration(vehicle_t *v, vs_velocity_t *defaultAccel);
 bool vs_getDefaultVelocity(vehicle_t *v, vs_velocity_t *defaultVel);
 bool vs_getIFVersion(vehicle_t *v, const char **version);
@@ -103,16 +104,16 @@ bool vs_getInput(vehicle_t *v, uint32_t ioid, uint32_t *input);
 bool vs_getPosition(vehicle_t *v, vs_position_t *pos);
 bool vs_getServoStatus(vehicle_t *v, uint32_t axisid, bool *status);
 bool vs_getState(vehicle_t *v, int16_t *state, char msg[VS_STATE_MSG_MAX]);
-bool vs_getVelocityLimit(vehicle_t *v, double *velLimitT, double *velLimitR);
+bool vs_getVelocityLimit(vehicle_t *v, vs_real_t *velLimitT, vs_real_t *velLimitR);
 bool vs_getVersion(vehicle_t *v, const char **ver);
-bool vs_moveCircularRel(vehicle_t *v, vs_point_t centerPoint, double theta);
+bool vs_moveCircularRel(vehicle_t *v, vs_point_t centerPoint, vs_real_t theta);
 bool vs_moveContinuousRel(vehicle_t *v, vs_position_t pos);
 bool vs_moveCruiseAbs(vehicle_t *v, vs_point_t cruisePoint);
-bool vs_moveForward(vehicle_t *v, double x_);
-bool vs_moveJog(vehicle_t *v, double xVel, double yVel, double thetaVel);
+bool vs_moveForward(vehicle_t *v, vs_real_t x_);
+bool vs_moveJog(vehicle_t *v, vs_real_t xVel, vs_real_t yVel, vs_real_t thetaVel);
 bool vs_moveLinearAbs(vehicle_t *v, vs_position_t pos);
 bool vs_moveLinearRel(vehicle_t *v, vs_position_t pos);
-bool vs_moveTurn(vehicle_t *v, double theta_);
+bool vs_moveTurn(vehicle_t *v, vs_real_t theta_);
 bool vs_pause(vehicle_t *v);
 bool vs_resume(vehicle_t *v);
 bool vs_setAcceleration(vehicle_t *v, vs_velocity_t accel);

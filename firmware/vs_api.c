@@ -1,6 +1,7 @@
-/* The double-facing VehicleService operations and vehicle_init.
+/* The VehicleService operations at the boundary, and vehicle_init.
  *
- * This is the one firmware file that computes with floating point: each
+ * With config.c, the one firmware file that computes with vs_real_t
+ * (real.h): doubles on a host, Q32 on a board built with VS_REAL_Q32. Each
  * argument is checked once (NaN, infinity, range) and converted to Q32; the
  * tick never sees a double. libc is not available, so NaN is "x != x" and
  * infinity fails the range bounds.
@@ -15,19 +16,26 @@
 
 #include "vehicle.h"
 
-#define POS_MAX_MM    1e6
-#define ANGLE_MAX_DEG 36000.0
-#define TWO_POW_32    4294967296.0
+#define POS_MAX_MM    VS_REAL(1e6)
+#define ANGLE_MAX_DEG VS_REAL(36000.0)
 #define PI_D	      3.14159265358979323846
-/* The feed-forward's lead for a drive lag, in ticks (kin.h): the lag plus
- * the tick by which the wheel loop runs ahead of its reference. */
-#define LAG_TICKS(ms, hz) ((ms) > 0.0 ? (ms) * (double)(hz) / 1000.0 + 1.0 : 0.0)
 
 /* Finite and |x| <= lim. */
-static bool within(double x, double lim)
+static bool within(vs_real_t x, vs_real_t lim)
 {
-	return x == x && x >= -lim && x <= lim;
+	return vs_real_finite(x) && x >= -lim && x <= lim;
 }
+
+#ifdef VS_REAL_Q32
+#define to_q32(x)   (x)
+#define from_q32(x) (x)
+/* round(x * scale) for 0 <= x * scale < 2^31 */
+static int64_t scaled(vs_real_t x, uint32_t scale)
+{
+	return (x * scale + (INT64_C(1) << 31)) >> 32;
+}
+#else
+#define TWO_POW_32 4294967296.0
 
 /* Rounded to nearest; callers have bounded |x| well inside the range. */
 static q32_t to_q32(double x)
@@ -40,6 +48,12 @@ static double from_q32(q32_t x)
 {
 	return (double)x / TWO_POW_32;
 }
+
+static int64_t scaled(double x, uint32_t scale)
+{
+	return (int64_t)(x * scale + 0.5);
+}
+#endif
 
 static bool pose_ok(const vs_position_t *p)
 {
@@ -107,32 +121,50 @@ static motion_kin_t init_motion(vehicle_t *v, const vs_config_t *cfg)
 
 /* The wheel loop and odometry; returns the encoder counts per mm, which
  * the supervision limits are counted in. */
-static double init_kin(vehicle_t *v, const vs_config_t *cfg, motion_kin_t kin)
+static vs_real_t init_kin(vehicle_t *v, const vs_config_t *cfg, motion_kin_t kin)
 {
-	double circumference = PI_D * cfg->wheel_diameter_mm;
-	double counts_per_mm = (double)cfg->encoder_counts_per_rev / circumference;
-	double half = cfg->kinematics == VS_KIN_OMNI
-			  ? (cfg->wheel_base_mm + cfg->track_width_mm) / 2.0
-			  : cfg->track_width_mm / 2.0;
-	double mm_per_deg = half * PI_D / 180.0;
+	vs_real_t twice_half = cfg->kinematics == VS_KIN_OMNI
+				   ? cfg->wheel_base_mm + cfg->track_width_mm
+				   : cfg->track_width_mm;
+#ifdef VS_REAL_Q32
+	q32_t counts_per_mm = fx_div(vs_real_int(cfg->encoder_counts_per_rev),
+				     fx_mul(VS_REAL(PI_D), cfg->wheel_diameter_mm));
+	q32_t mm_per_deg = fx_mul(twice_half, VS_REAL(PI_D / 360.0));
+	q32_t deg_per_mm = fx_div(VS_REAL_ONE, mm_per_deg);
+#else
+	double counts_per_mm_d =
+	    (double)cfg->encoder_counts_per_rev / (PI_D * cfg->wheel_diameter_mm);
+	double mm_per_deg_d = twice_half / 2.0 * PI_D / 180.0;
+	q32_t counts_per_mm = to_q32(counts_per_mm_d);
+	q32_t mm_per_deg = to_q32(mm_per_deg_d);
+	q32_t deg_per_mm = to_q32(1.0 / mm_per_deg_d);
+#endif
 	kin_params_t kp = {
 	    .kin = (uint8_t)kin,
 	    .n = v->naxes,
 	    .tick_hz = cfg->tick_hz,
-	    .counts_per_mm = to_q32(counts_per_mm),
-	    .mm_per_deg = to_q32(mm_per_deg),
-	    .deg_per_mm = to_q32(1.0 / mm_per_deg),
-	    .kp_q16 = (int64_t)(cfg->wheel_kp_per_s * 65536.0 + 0.5),
+	    .counts_per_mm = counts_per_mm,
+	    .mm_per_deg = mm_per_deg,
+	    .deg_per_mm = deg_per_mm,
+	    .kp_q16 = scaled(cfg->wheel_kp_per_s, 65536u),
 	};
+	/* The feed-forward's lead for a drive lag, in ticks (kin.h): the lag
+	 * plus the tick by which the wheel loop runs ahead of its reference. */
 	for (unsigned i = 0; i < VS_MAX_AXES; i++)
 		kp.lag_q16[i] =
-		    (int64_t)(LAG_TICKS(cfg->drive_lag_ms[i], cfg->tick_hz) * 65536.0 + 0.5);
+		    cfg->drive_lag_ms[i] > 0
+			? scaled(cfg->drive_lag_ms[i] * cfg->tick_hz / 1000 + VS_REAL_ONE, 65536u)
+			: 0;
 	kin_init(&v->kin, &kp);
+#ifdef VS_REAL_Q32
 	return counts_per_mm;
+#else
+	return counts_per_mm_d; /* unrounded: the supervision limits round once */
+#endif
 }
 
 /* Supervision limits in ticks, counts and millivolts. */
-static void init_supervision(vehicle_t *v, const vs_config_t *cfg, double counts_per_mm)
+static void init_supervision(vehicle_t *v, const vs_config_t *cfg, vs_real_t counts_per_mm)
 {
 	v->period_us = 1000000u / cfg->tick_hz;
 	v->drive_timeout_ticks = ms_to_ticks(cfg->drive_timeout_ms, cfg->tick_hz);
@@ -142,19 +174,25 @@ static void init_supervision(vehicle_t *v, const vs_config_t *cfg, double counts
 	/* A speed that must move the encoder by 20 counts within the window:
 	 * well clear of quantisation, so a slow creep never trips it. */
 	v->encoder_stuck_cps_q8 = (int32_t)(20u * 256u * 1000u / cfg->encoder_stuck_ms);
+#ifdef VS_REAL_Q32
+	q32_t following = fx_mul(cfg->following_error_mm, counts_per_mm);
+	q32_t window = fx_mul(cfg->position_window_mm, counts_per_mm);
+	v->following_err_max_q32 = (following + (INT64_C(1) << 31)) >> 32 << 32;
+#else
+	double window = cfg->position_window_mm * counts_per_mm;
 	v->following_err_max_q32 = (int64_t)(cfg->following_error_mm * counts_per_mm + 0.5) << 32;
+#endif
 	/* The window is at least one count: a wheel at rest may sit a count
 	 * off its reference in quantisation. */
-	double window = cfg->position_window_mm * counts_per_mm;
-	v->window_q32 = to_q32(window < 1.0 ? 1.0 : window);
+	v->window_q32 = to_q32(window < VS_REAL_ONE ? VS_REAL_ONE : window);
 	v->window_ticks = ms_to_ticks(cfg->position_window_ms, cfg->tick_hz);
 	v->settle_timeout_ticks = ms_to_ticks(cfg->settle_timeout_ms, cfg->tick_hz);
 	v->inpos_ticks = v->window_ticks; /* servo off: nothing to settle */
-	v->battery_low_mv = (uint32_t)(cfg->battery_low_v * 1000.0 + 0.5);
-	v->battery_critical_mv = (uint32_t)(cfg->battery_critical_v * 1000.0 + 0.5);
+	v->battery_low_mv = (uint32_t)scaled(cfg->battery_low_v, 1000u);
+	v->battery_critical_mv = (uint32_t)scaled(cfg->battery_critical_v, 1000u);
 	v->battery_low_armed = true;
 	v->caution_vel_t = to_q32(cfg->caution_vel_t_mm_s);
-	v->joystick_deadband_q15 = (int32_t)(cfg->joystick_deadband * 32767.0 + 0.5);
+	v->joystick_deadband_q15 = (int32_t)scaled(cfg->joystick_deadband, 32767u);
 }
 
 int vehicle_init(vehicle_t *v, const vs_config_t *cfg, const vs_hal_t *hal, const char **bad_field)
@@ -172,7 +210,7 @@ int vehicle_init(vehicle_t *v, const vs_config_t *cfg, const vs_hal_t *hal, cons
 	v->cfg = *cfg;
 	v->hal = *hal;
 	v->naxes = vs_config_axes(cfg);
-	double counts_per_mm = init_kin(v, cfg, init_motion(v, cfg));
+	vs_real_t counts_per_mm = init_kin(v, cfg, init_motion(v, cfg));
 	v->vel_set = (vs_velocity_t){cfg->vel_default_t_mm_s, cfg->vel_default_r_deg_s};
 	v->acc_set = (vs_velocity_t){cfg->acc_default_t_mm_s2, cfg->acc_default_r_deg_s2};
 	v->jog_timeout_ms = (int16_t)cfg->jog_timeout_default_ms;
@@ -188,14 +226,14 @@ int vehicle_init(vehicle_t *v, const vs_config_t *cfg, const vs_hal_t *hal, cons
 
 /* ---- queries ---------------------------------------------------------- */
 
-bool vs_getAccelerationLimit(vehicle_t *v, double *accLimitT, double *accLimitR)
+bool vs_getAccelerationLimit(vehicle_t *v, vs_real_t *accLimitT, vs_real_t *accLimitR)
 {
 	*accLimitT = v->cfg.acc_limit_t_mm_s2;
 	*accLimitR = v->cfg.acc_limit_r_deg_s2;
 	return true;
 }
 
-bool vs_getVelocityLimit(vehicle_t *v, double *velLimitT, double *velLimitR)
+bool vs_getVelocityLimit(vehicle_t *v, vs_real_t *velLimitT, vs_real_t *velLimitR)
 {
 	*velLimitT = v->cfg.vel_limit_t_mm_s;
 	*velLimitR = v->cfg.vel_limit_r_deg_s;
@@ -216,10 +254,15 @@ bool vs_getDefaultVelocity(vehicle_t *v, vs_velocity_t *defaultVel)
 	return true;
 }
 
-bool vs_getBatteryVoltage(vehicle_t *v, double *voltage)
+bool vs_getBatteryVoltage(vehicle_t *v, vs_real_t *voltage)
 {
 	/* 0.1 V units: 24300 mV reads 243.0. */
+#ifdef VS_REAL_Q32
+	uint32_t mv = v->battery_mv;
+	*voltage = vs_real_int(mv / 100u) + (vs_real_int(mv % 100u) + 50) / 100;
+#else
 	*voltage = (double)v->battery_mv / 100.0;
+#endif
 	return true;
 }
 
@@ -238,11 +281,11 @@ bool vs_getPosition(vehicle_t *v, vs_position_t *pos)
 /* ---- settings --------------------------------------------------------- */
 
 /* 0 < x <= limit, finite; 110 when not a number, 111 otherwise. */
-static uint32_t check_setting(double x, double limit)
+static uint32_t check_setting(vs_real_t x, vs_real_t limit)
 {
-	if (!within(x, 1e300))
+	if (!vs_real_finite(x))
 		return ALM_W_BAD_ARGUMENT;
-	if (!(x > 0.0 && x <= limit))
+	if (!(x > 0 && x <= limit))
 		return ALM_W_OVER_LIMIT;
 	return 0;
 }
@@ -295,7 +338,7 @@ bool vs_setPosition(vehicle_t *v, vs_position_t pos)
 
 /* ---- motion ----------------------------------------------------------- */
 
-bool vs_moveForward(vehicle_t *v, double x_)
+bool vs_moveForward(vehicle_t *v, vs_real_t x_)
 {
 	static const char op[] = "moveForward";
 	if (!within(x_, POS_MAX_MM))
@@ -307,7 +350,7 @@ bool vs_moveForward(vehicle_t *v, double x_)
 	return true;
 }
 
-bool vs_moveTurn(vehicle_t *v, double theta_)
+bool vs_moveTurn(vehicle_t *v, vs_real_t theta_)
 {
 	static const char op[] = "moveTurn";
 	if (!within(theta_, ANGLE_MAX_DEG))
@@ -332,14 +375,14 @@ bool vs_moveLinearRel(vehicle_t *v, vs_position_t pos)
 	return true;
 }
 
-bool vs_moveCircularRel(vehicle_t *v, vs_point_t centerPoint, double theta)
+bool vs_moveCircularRel(vehicle_t *v, vs_point_t centerPoint, vs_real_t theta)
 {
 	static const char op[] = "moveCircularRel";
 	if (!within(centerPoint.x, POS_MAX_MM) || !within(centerPoint.y, POS_MAX_MM) ||
 	    !within(theta, ANGLE_MAX_DEG))
 		return vehicle_refuse(v, op, ALM_W_BAD_ARGUMENT);
 	/* A differential base can only turn about a point on its axle line. */
-	if (v->cfg.kinematics == VS_KIN_DIFF && centerPoint.x != 0.0)
+	if (v->cfg.kinematics == VS_KIN_DIFF && centerPoint.x != 0)
 		return vehicle_refuse(v, op, ALM_W_KINEMATICS);
 	if (!vehicle_move_gate(v, op, VEHICLE_GATE_READY))
 		return false;
@@ -387,16 +430,16 @@ bool vs_moveContinuousRel(vehicle_t *v, vs_position_t pos)
 	return true;
 }
 
-bool vs_moveJog(vehicle_t *v, double xVel, double yVel, double thetaVel)
+bool vs_moveJog(vehicle_t *v, vs_real_t xVel, vs_real_t yVel, vs_real_t thetaVel)
 {
 	static const char op[] = "moveJog";
-	if (!within(xVel, 1e300) || !within(yVel, 1e300) || !within(thetaVel, 1e300))
+	if (!vs_real_finite(xVel) || !vs_real_finite(yVel) || !vs_real_finite(thetaVel))
 		return vehicle_refuse(v, op, ALM_W_BAD_ARGUMENT);
 	/* Spec 6.6: magnitudes within the limits; signs reverse; zero stops. */
 	if (!within(xVel, v->cfg.vel_limit_t_mm_s) || !within(yVel, v->cfg.vel_limit_t_mm_s) ||
 	    !within(thetaVel, v->cfg.vel_limit_r_deg_s))
 		return vehicle_refuse(v, op, ALM_W_OVER_LIMIT);
-	if (v->cfg.kinematics == VS_KIN_DIFF && yVel != 0.0)
+	if (v->cfg.kinematics == VS_KIN_DIFF && yVel != 0)
 		return vehicle_refuse(v, op, ALM_W_KINEMATICS);
 	if (!vehicle_move_gate(v, op, VEHICLE_GATE_JOG))
 		return false;
@@ -405,13 +448,13 @@ bool vs_moveJog(vehicle_t *v, double xVel, double yVel, double thetaVel)
 	return true;
 }
 
-void vehicle_jerk(const vehicle_t *v, double *jt, double *jr)
+void vehicle_jerk(const vehicle_t *v, vs_real_t *jt, vs_real_t *jr)
 {
 	*jt = v->cfg.jerk_default_t_mm_s3;
 	*jr = v->cfg.jerk_default_r_deg_s3;
 }
 
-bool vehicle_set_jerk(vehicle_t *v, double jt, double jr)
+bool vehicle_set_jerk(vehicle_t *v, vs_real_t jt, vs_real_t jr)
 {
 	if (!vs_jerk_fits(&v->cfg, jt, v->cfg.jerk_limit_t_mm_s3) ||
 	    !vs_jerk_fits(&v->cfg, jr, v->cfg.jerk_limit_r_deg_s3))

@@ -4,8 +4,10 @@
 #                           arm-none-eabi-gcc -Os: static libraries, a minimal
 #                           image (hal/cortexm), flash and RAM against budget
 #                           (over budget fails the build, see MCU_BUDGET_ENFORCED)
-#   make TARGET=cortex-m0   the same for ARMv6-M, and fails if the tick-path
-#                           objects reference any floating-point helper
+#   make TARGET=cortex-m0   the same for ARMv6-M
+#                           both fail if any object of the image references a
+#                           floating-point helper (firmware/real.h: the
+#                           boundary's numbers are Q32 on a board)
 #   ARM_PREFIX=             toolchain prefix (default arm-none-eabi-)
 #
 # `make check` also runs the self-test of that floating-point check, and
@@ -27,8 +29,6 @@ MCU_BUDGET_ENFORCED := cortex-m4
 MCU_CPU_cortex-m4 := -mcpu=cortex-m4 -mthumb -mfloat-abi=soft
 MCU_CPU_cortex-m0 := -mcpu=cortex-m0 -mthumb -mfloat-abi=soft
 
-# Boundary and initialisation code allowed to use doubles (see firmware/vs_api.c).
-FW_FLOAT_OK := firmware/vs_api.c firmware/config.c
 # The console and binary-frame parsers; the host client and CAN mapping stay on the host.
 MCU_PROTO_SRC := $(filter $(addprefix proto/,cmdtab.c dispatch.c console.c fmt.c numparse.c wire.c frame.c \
 	frame_srv.c link.c port.c server.c),$(PROTO_SRC))
@@ -41,8 +41,11 @@ ifneq ($(filter cortex-m4 cortex-m0,$(TARGET)),)
 .DEFAULT_GOAL := cortexm
 
 MCU := $(BUILD)/$(TARGET)
-# A 16-deep motion queue (2 kB of RAM less than the host's 32).
-MCU_DEFS := -DMOTION_QUEUE_LEN=16 -DMOTION_NO_ONLINE_JERK
+# A 16-deep motion queue (2 kB of RAM less than the host's 32). The
+# boundary's numbers in Q32, not double (firmware/real.h): no floating point
+# in the image; -Wfloat-conversion catches a double constant handed to it
+# without VS_REAL().
+MCU_DEFS := -DMOTION_QUEUE_LEN=16 -DMOTION_NO_ONLINE_JERK -DVS_REAL_Q32 -Wfloat-conversion
 # Link-time optimisation: inlining and dead-code removal across files saves
 # a tenth of the flash (49.4 KiB -> 44.5 KiB when it was brought in). Fat
 # objects keep their machine code too, which check_nofloat.sh reads.
@@ -94,8 +97,8 @@ $(MCU)/bench.elf: $(call mcu_objs,$(MCU_BENCH_SRC)) $(MCU)/libfirmware.a hal/cor
 		-Wl,--gc-sections -T hal/cortexm/$(TARGET).ld \
 		-o $@ $(filter %.o %.a,$^) -lm -lc -lnosys -lgcc
 
-# Tick path: every firmware object but the double boundary.
-MCU_TICK_OBJS := $(call mcu_objs,$(filter-out $(FW_FLOAT_OK),$(FW_SRC)))
+# Every object of the image: none may use floating point.
+MCU_IMAGE_OBJS := $(call mcu_objs,$(FW_SRC) $(MCU_PROTO_SRC) $(MCU_BOARD_SRC))
 
 cortexm: $(MCU)/vehicle.elf $(MCU)/libfirmware.a $(MCU)/libproto.a
 	$(Q)echo "$(TARGET): $(MCU)/libfirmware.a $(MCU)/libproto.a $(MCU)/vehicle.elf" \
@@ -116,10 +119,9 @@ cortexm: $(MCU)/vehicle.elf $(MCU)/libfirmware.a $(MCU)/libproto.a
 	$(Q)echo "by origin:"; awk -f hal/cortexm/mapsize.awk $(MCU)/vehicle.map | sort -k3 -n -r
 	$(Q)echo "largest RAM users:"; $(ARM_NM) -S --size-sort -t d $(MCU)/vehicle.elf | \
 		awk '$$3 ~ /[bBdD]/ { print }' | tail -5 | awk '{ printf "  %6d %s\n", $$2, $$4 }'
-ifeq ($(TARGET),cortex-m0)
-	$(Q)hal/cortexm/check_nofloat.sh $(ARM_NM) $(MCU_TICK_OBJS)
-	$(Q)echo "no floating point on the tick path: $(notdir $(MCU_TICK_OBJS)) reference no soft-float helper"
-endif
+	$(Q)hal/cortexm/check_nofloat.sh $(ARM_NM) $(MCU_IMAGE_OBJS)
+	$(Q)echo "no floating point in the image: its $(words $(MCU_IMAGE_OBJS)) objects reference" \
+		"no soft-float helper"
 
 -include $(shell find $(MCU)/obj -name '*.d' 2>/dev/null)
 endif

@@ -93,7 +93,7 @@ typedef union {
 	bool b;
 	int16_t h;
 	uint32_t u;
-	double d;
+	vs_real_t d; /* real.h: a double on a host, Q32 on a board */
 	const char *s;
 	cmd_alarms_t alarms;
 } cmd_value_t;

@@ -15,6 +15,11 @@
 #include "fmt.h"
 #include "numparse.h"
 
+/* $config reads the configuration through the host's vs_config_get. */
+#if defined(VS_REAL_Q32) && !defined(VS_NO_CONFIG_EXTRA)
+#define VS_NO_CONFIG_EXTRA
+#endif
+
 /* Tokens kept per line: an operation needs at most 1 + CMD_MAX_FIELDS; '$'
  * commands get a few more. Further tokens are only counted. */
 #define CONSOLE_ARGV_MAX 16
@@ -80,11 +85,11 @@ __attribute__((format(printf, 2, 3))) static void rb_printf(rbuf_t *r, const cha
 
 /* Exactly three decimals; a value that rounds to zero prints as 0.000, never
  * -0.000. */
-static void rb_double(rbuf_t *r, double v)
+static void rb_real(rbuf_t *r, vs_real_t v)
 {
 	char tmp[NP_FIXED3_MAX];
 
-	np_fmt_fixed3(v, tmp);
+	np_fmt_real3(v, tmp);
 	if (strcmp(tmp, "-0.000") == 0)
 		rb_puts(r, "0.000");
 	else
@@ -269,7 +274,7 @@ static void rb_value(rbuf_t *r, char type, const cmd_value_t *v)
 		break;
 	case CMD_T_DOUBLE:
 		rb_puts(r, " ");
-		rb_double(r, v->d);
+		rb_real(r, v->d);
 		break;
 	case CMD_T_STRING:
 		rb_puts(r, " ");
@@ -309,19 +314,20 @@ static const char *mode_name(uint8_t m)
 	return m < MOTION_MODE_COUNT ? names[m] : "?";
 }
 
-static double q32_to_double(q32_t v)
+static void rb_q32(rbuf_t *r, q32_t v)
 {
-	return (double)v / 4294967296.0;
+	char tmp[NP_FIXED3_MAX];
+
+	rb_puts(r, " ");
+	np_fmt_q32_fixed3(v, tmp);
+	rb_puts(r, strcmp(tmp, "-0.000") == 0 ? "0.000" : tmp);
 }
 
 static void rb_pose(rbuf_t *r, const fx_pose_t *p)
 {
-	rb_puts(r, " ");
-	rb_double(r, q32_to_double(p->x_mm));
-	rb_puts(r, " ");
-	rb_double(r, q32_to_double(p->y_mm));
-	rb_puts(r, " ");
-	rb_double(r, q32_to_double(p->th_deg));
+	rb_q32(r, p->x_mm);
+	rb_q32(r, p->y_mm);
+	rb_q32(r, p->th_deg);
 }
 
 /* "boolean name(in double x_, out short state, ...)" */
@@ -347,6 +353,7 @@ static void rb_signature(rbuf_t *r, const cmd_def_t *d)
 	rb_puts(r, ")");
 }
 
+#ifndef VS_NO_CONFIG_EXTRA
 /* "ok" and " NAME" for every row of the configuration table: the list of
  * $config fits one reply (a char per byte of " NAME", as the NUL of #m). */
 struct config_list_bytes {
@@ -386,7 +393,7 @@ static bool exec_config(console_t *c, char **argv, unsigned ntok, rbuf_t *r)
 
 		if (f->type == VS_CFG_DOUBLE) {
 			rb_puts(r, " ");
-			rb_double(r, v);
+			rb_real(r, v);
 		} else if (f->type == VS_CFG_BOOL) {
 			rb_puts(r, v != 0.0 ? " true" : " false");
 		} else {
@@ -395,18 +402,18 @@ static bool exec_config(console_t *c, char **argv, unsigned ntok, rbuf_t *r)
 	}
 	return true;
 }
+#endif
 
 /* $jerk [T R]: the jerk moves run at, mm/s^3 and deg/s^3 (0 = unlimited),
  * with the configured limits; the set form takes both or changes nothing. */
 static bool exec_jerk(console_t *c, char **argv, unsigned ntok, rbuf_t *r)
 {
-	double jt, jr;
+	vs_real_t jt, jr;
 	if (ntok != 1 && ntok != 3)
 		return reply_error(c, r, "%d $jerk takes 0 or 2 arguments, got %u", CONSOLE_E_ARITY,
 				   ntok - 1);
 	if (ntok == 3) {
-		if (np_parse_double(argv[1], &jt) != NP_OK ||
-		    np_parse_double(argv[2], &jr) != NP_OK)
+		if (np_parse_real(argv[1], &jt) != NP_OK || np_parse_real(argv[2], &jr) != NP_OK)
 			return reply_error(c, r, "%d $jerk: not a number", CONSOLE_E_NUMBER);
 		if (!vehicle_set_jerk(c->v, jt, jr))
 			return reply_error(c, r,
@@ -416,11 +423,11 @@ static bool exec_jerk(console_t *c, char **argv, unsigned ntok, rbuf_t *r)
 	}
 	vehicle_jerk(c->v, &jt, &jr);
 	const vs_config_t *cfg = &c->v->cfg;
-	const double vals[4] = {jt, jr, cfg->jerk_limit_t_mm_s3, cfg->jerk_limit_r_deg_s3};
+	const vs_real_t vals[4] = {jt, jr, cfg->jerk_limit_t_mm_s3, cfg->jerk_limit_r_deg_s3};
 	rb_puts(r, "ok jerk");
 	for (int i = 0; i < 4; i++) {
 		rb_puts(r, i == 2 ? " limit " : " ");
-		rb_double(r, vals[i]);
+		rb_real(r, vals[i]);
 	}
 	return true;
 }
@@ -455,7 +462,6 @@ static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_
 	}
 	if (np_streq_nocase(cmd, "$config")) {
 #ifdef VS_NO_CONFIG_EXTRA
-		(void)exec_config;
 		/* Its configuration is compiled in (hal/cortexm/board_main.c). */
 		return reply_error(c, r, "%d $config is not in this build", CONSOLE_E_EXTRA);
 #else
@@ -615,7 +621,7 @@ static bool exec_line(console_t *c, const char *line, size_t len, rbuf_t *r)
 				    CONSOLE_E_BOOL, d->name, fl, fn, tok);
 			break;
 		case CMD_T_DOUBLE:
-			if (np_parse_double(tok, &in[k].d) != NP_OK)
+			if (np_parse_real(tok, &in[k].d) != NP_OK)
 				return reply_error(c, r, "%d %s %.*s: bad number %s",
 						   CONSOLE_E_NUMBER, d->name, fl, fn, tok);
 			break;

@@ -6,6 +6,8 @@
 
 #include <string.h>
 
+#define NP_2P53 (UINT64_C(1) << 53)
+
 /* Exponents are saturated here: far beyond any representable double or
  * integer, and small enough that digit counts added to it never overflow. */
 #define NP_EXP_SAT 100000L
@@ -74,13 +76,29 @@ static int dec_digit(const np_dec_t *d, long k)
 	return k < d->in ? d->ip[k] - '0' : d->fp[k - d->in] - '0';
 }
 
+/* value = *w * 10^e10: w the first (up to) 19 significant digits, e10 the
+ * scale (digits after the 19th only lower the precision, not the scale);
+ * returns the count of significant digits, those beyond w included. */
+static long dec_value(const np_dec_t *d, uint64_t *w, long *e10)
+{
+	long n = d->in + d->fn, first, used;
+
+	for (first = 0; first < n && dec_digit(d, first) == 0; first++)
+		;
+	used = n - first > 19 ? 19 : n - first;
+	*w = 0;
+	for (long k = first; k < first + used; k++)
+		*w = *w * 10u + (uint64_t)dec_digit(d, k);
+	*e10 = d->exp - d->fn + (n - first - used);
+	return n - first;
+}
+
+#ifndef VS_REAL_Q32
 /* 10^0 .. 10^22: every one is exactly a double. */
 static const double pow10_exact[23] = {
     1e0,  1e1,	1e2,  1e3,  1e4,  1e5,	1e6,  1e7,  1e8,  1e9,	1e10, 1e11,
     1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
 };
-
-#define NP_2P53 (UINT64_C(1) << 53)
 
 static bool np_finite(double v)
 {
@@ -93,24 +111,16 @@ static bool np_finite(double v)
 np_result_t np_parse_double(const char *s, double *out)
 {
 	np_dec_t d;
-	long n, k, first, used, e10;
-	uint64_t w = 0;
+	long e10, sig;
+	uint64_t w;
 	double v;
 
 	if (!np_scan(s, &d))
 		return NP_SYNTAX;
-	/* value = w * 10^e10, w the first (up to) 19 significant digits. */
-	n = d.in + d.fn;
-	for (first = 0; first < n && dec_digit(&d, first) == 0; first++)
-		;
-	used = n - first > 19 ? 19 : n - first;
-	for (k = first; k < first + used; k++)
-		w = w * 10u + (uint64_t)dec_digit(&d, k);
-	/* digits after the 19th only lower the precision, not the scale */
-	e10 = d.exp - d.fn + (n - first - used);
+	sig = dec_value(&d, &w, &e10);
 	if (w == 0) {
 		v = 0.0;
-	} else if (w <= NP_2P53 && e10 >= -22 && e10 <= 22 && n - first <= 19) {
+	} else if (w <= NP_2P53 && e10 >= -22 && e10 <= 22 && sig <= 19) {
 		/* Both operands exact: one correctly rounded operation. */
 		v = (double)w;
 		v = e10 < 0 ? v / pow10_exact[-e10] : v * pow10_exact[e10];
@@ -138,6 +148,8 @@ np_result_t np_parse_double(const char *s, double *out)
 	*out = d.neg ? -v : v;
 	return NP_OK;
 }
+
+#endif /* VS_REAL_Q32 */
 
 np_result_t np_parse_int(const char *s, int64_t min, int64_t max, int64_t *out)
 {
@@ -252,6 +264,7 @@ size_t np_fmt_i64(int64_t v, char *buf)
 	return 1 + np_fmt_u64(-(uint64_t)v, buf + 1);
 }
 
+#ifndef VS_REAL_Q32
 /* An integer m * 2^e2 of up to 309 digits, exactly: base 10^9 limbs. */
 static size_t fmt_big(uint64_t m, int e2, char *buf)
 {
@@ -340,4 +353,168 @@ size_t np_fmt_fixed3(double v, char *buf)
 	buf[n++] = (char)('0' + q % 10u);
 	buf[n] = '\0';
 	return n;
+}
+#endif /* VS_REAL_Q32 */
+
+/* ---- Q32.32 (real.h) --------------------------------------------------- */
+
+#define Q32_SAT INT64_MAX
+#define Q32_NAN INT64_MIN
+
+/* The first 19 significant digits of DBL_MAX (1.797...e308): a decimal
+ * above it is rejected as the double parser rejects it. */
+#define DBL_MAX_19 UINT64_C(1797693134862315708)
+
+/* round(w / 10^k * 2^32), half away from zero, saturating. As
+ * w * 2^(32 - k) / 5^k: 5^27 still fits 64 bits, so up to 27 decimals the
+ * rounding is exact; beyond, the value is below 10^-8 and the dropped digits
+ * weigh under 10^-27. */
+static int64_t q32_of_ratio(uint64_t w, long k)
+{
+	uint64_t d = 1u, q, r, f = 0;
+
+	for (; k > 27; k--)
+		w /= 10u;
+	for (long i = 0; i < k; i++)
+		d *= 5u;
+	q = w / d;
+	r = w % d;
+	if (q >> (31 + k))
+		return Q32_SAT;
+	/* 32 - k fraction bits by binary long division: r < d < 2^63. */
+	for (long i = k; i < 32; i++) {
+		r <<= 1;
+		f <<= 1;
+		if (r >= d) {
+			r -= d;
+			f |= 1u;
+		}
+	}
+	q = (q << (32 - k)) + f;
+	if (r >= d - r) /* at least half: away from zero */
+		q++;
+	return q >> 63 ? Q32_SAT : (int64_t)q;
+}
+
+np_result_t np_parse_q32(const char *s, int64_t *out)
+{
+	np_dec_t d;
+	long e10, sig;
+	uint64_t w, w19;
+	int64_t v;
+
+	if (!np_scan(s, &d))
+		return NP_SYNTAX;
+	sig = dec_value(&d, &w, &e10);
+	if (w == 0) {
+		*out = 0;
+		return NP_OK;
+	}
+	/* Beyond a double's range: junk, as for np_parse_double. The
+	 * magnitude is 10^(digits of w - 1 + e10). */
+	long used = sig > 19 ? 19 : sig;
+	long mag = used - 1 + e10;
+	w19 = w;
+	for (long k = used; k < 19; k++)
+		w19 *= 10u;
+	if (mag > 308 || (mag == 308 && w19 > DBL_MAX_19))
+		return NP_SYNTAX;
+	if (e10 >= 0) {
+		/* An integer: 2^31 or more saturates. */
+		v = Q32_SAT;
+		if (e10 <= 9) {
+			uint64_t x = w;
+
+			for (long k = 0; k < e10 && x < (UINT64_C(1) << 31); k++)
+				x *= 10u;
+			if (x < (UINT64_C(1) << 31))
+				v = (int64_t)(x << 32);
+		}
+	} else {
+		v = q32_of_ratio(w, -e10);
+	}
+	*out = d.neg ? -v : v;
+	return NP_OK;
+}
+
+size_t np_fmt_q32_fixed3(int64_t v, char *buf)
+{
+	uint64_t m = v < 0 ? 0u - (uint64_t)v : (uint64_t)v;
+	uint64_t t = (m & 0xffffffffu) * 1000u, r = t & 0xffffffffu;
+	uint64_t q = (m >> 32) * 1000u + (t >> 32);
+	size_t n = 0;
+
+	if (v == Q32_NAN) {
+		memcpy(buf, "nan", 4);
+		return 3;
+	}
+	if (v < 0)
+		buf[n++] = '-';
+	/* Thousandths rounded to nearest, ties to even, as "%.3f" rounds
+	 * the same value as a double. */
+	if (r > 0x80000000u || (r == 0x80000000u && (q & 1u)))
+		q++;
+	n += np_fmt_u64(q / 1000u, buf + n);
+	buf[n++] = '.';
+	buf[n++] = (char)('0' + q / 100u % 10u);
+	buf[n++] = (char)('0' + q / 10u % 10u);
+	buf[n++] = (char)('0' + q % 10u);
+	buf[n] = '\0';
+	return n;
+}
+
+int64_t np_q32_from_ieee(uint64_t b)
+{
+	int ex = (int)((b >> 52) & 0x7ffu), s;
+	uint64_t m = b & (NP_2P53 / 2u - 1u), q;
+
+	if (ex == 0x7ff)
+		return Q32_NAN;
+	if (ex)
+		m |= NP_2P53 / 2u;
+	/* value = m * 2^(ex - 1075), so Q32 = m * 2^s */
+	s = (ex ? ex : 1) - 1075 + 32;
+	if (m == 0 || s < -63) {
+		q = 0; /* below 2^-33: rounds to zero */
+	} else if (s >= 0) {
+		if (s > 10) /* m * 2^s >= 2^63 */
+			return b >> 63 ? -Q32_SAT : Q32_SAT;
+		q = m << s;
+	} else {
+		uint64_t rem = m & ((UINT64_C(1) << -s) - 1u);
+
+		q = m >> -s;
+		if (rem >= UINT64_C(1) << (-s - 1)) /* half away from zero */
+			q++;
+	}
+	return b >> 63 ? -(int64_t)q : (int64_t)q;
+}
+
+uint64_t np_q32_to_ieee(int64_t v)
+{
+	uint64_t m = v < 0 ? 0u - (uint64_t)v : (uint64_t)v, sign = (uint64_t)(v < 0) << 63;
+	int p;
+
+	if (v == 0)
+		return 0;
+	if (v == Q32_NAN)
+		return UINT64_C(0x7ff8000000000000);
+	p = 63 - __builtin_clzll(m);
+	if (p > 52) {
+		/* round to 53 bits, ties to even, as int64 -> double does */
+		int sh = p - 52;
+		uint64_t rem = m & ((UINT64_C(1) << sh) - 1u), half = UINT64_C(1) << (sh - 1);
+
+		m >>= sh;
+		if (rem > half || (rem == half && (m & 1u)))
+			m++;
+		if (m >> 53) {
+			m >>= 1;
+			p++;
+		}
+	} else {
+		m <<= 52 - p;
+	}
+	/* value = v * 2^-32: exponent p - 32 */
+	return sign | (uint64_t)(p - 32 + 1023) << 52 | (m & (NP_2P53 / 2u - 1u));
 }

@@ -51,4 +51,28 @@ size_t np_fmt_i64(int64_t v, char *buf);
  * "-inf", "nan", "-nan" as printf has them. */
 size_t np_fmt_fixed3(double v, char *buf);
 
+/* Q32.32 (firmware/real.h) for a board built with VS_REAL_Q32, where the
+ * console and the wire carry the unit's numbers without floating point.
+ * np_parse_q32 takes what np_parse_double takes and rounds the decimal to
+ * the nearest Q32 (ties away from zero), exactly for up to 19 significant
+ * digits and 27 decimals; beyond +-2^31 it saturates at
+ * +-INT64_MAX. np_fmt_q32_fixed3 writes what np_fmt_fixed3 writes for the
+ * same value; "nan" for INT64_MIN. np_q32_from_ieee rounds an IEEE-754
+ * double to Q32 as the host's conversion does (NaN and infinities give
+ * INT64_MIN, finite values beyond the range saturate); np_q32_to_ieee is
+ * the host's (double)v / 2^32. */
+np_result_t np_parse_q32(const char *s, int64_t *out);
+size_t np_fmt_q32_fixed3(int64_t v, char *buf);
+int64_t np_q32_from_ieee(uint64_t bits);
+uint64_t np_q32_to_ieee(int64_t v);
+
+/* The boundary's number (real.h) either way. */
+#ifdef VS_REAL_Q32
+#define np_parse_real np_parse_q32
+#define np_fmt_real3  np_fmt_q32_fixed3
+#else
+#define np_parse_real np_parse_double
+#define np_fmt_real3  np_fmt_fixed3
+#endif
+
 #endif

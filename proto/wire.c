@@ -4,6 +4,8 @@
 
 #include <string.h>
 
+#include "numparse.h"
+
 static const char *const status_names[WIRE_ST_COUNT] = {
     "ok", "crc", "oversize", "length", "opcode", "value", "truncated", "space",
 };
@@ -104,7 +106,11 @@ static int put_value(wout_t *o, char type, const cmd_value_t *v)
 	case CMD_T_DOUBLE:
 		if (!room(o, 8))
 			return WIRE_ST_SPACE;
+#ifdef VS_REAL_Q32
+		bits = np_q32_to_ieee(v->d);
+#else
 		memcpy(&bits, &v->d, sizeof(bits));
+#endif
 		put_u64(o->buf + o->len, bits);
 		o->len += 8;
 		return WIRE_ST_OK;
@@ -215,7 +221,11 @@ static int get_value(win_t *in, char type, cmd_value_t *v, unsigned field, wire_
 		if (!avail(in, 8))
 			return WIRE_ST_LENGTH;
 		bits = get_u64(in->buf + in->pos);
+#ifdef VS_REAL_Q32
+		v->d = np_q32_from_ieee(bits);
+#else
 		memcpy(&v->d, &bits, sizeof(bits));
+#endif
 		in->pos += 8;
 		return WIRE_ST_OK;
 	case CMD_T_STRING: {

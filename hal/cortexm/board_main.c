@@ -40,7 +40,7 @@ static __attribute__((noinline)) uint32_t unit_init(void)
 	cfg.has_joystick = false;
 	/* The loopback's drives follow their setpoints at once. */
 	for (unsigned i = 0; i < VS_MAX_AXES; i++)
-		cfg.drive_lag_ms[i] = 0.0;
+		cfg.drive_lag_ms[i] = 0;
 	loop_hal_init(&plant, cfg.tick_hz);
 	if (vehicle_init(&unit, &cfg, &hal, NULL) != 0)
 		for (;;)

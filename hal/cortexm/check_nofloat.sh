@@ -15,7 +15,7 @@ bad=$("$nm" -u -A "$@" | awk '
 		print "  " file ": " sym
 	}')
 if [ -n "$bad" ]; then
-	echo "floating point referenced on the tick path:"
+	echo "floating point referenced in the board image:"
 	echo "$bad"
 	exit 1
 fi

@@ -215,16 +215,21 @@ static void single_moves(const char *sfx, const char *at)
 /* The 10-waypoint route of tools/bench/rig.c, at the jerk set. */
 static void route(const char *name, const char *what)
 {
+	double wp[ROUTE_N][2];
+
 	setup();
-	for (int i = 0; i < ROUTE_N; i++)
-		if (!motion_cruise_abs(&eng, q(route_mm[i][0]), q(route_mm[i][1])))
+	for (int i = 0; i < ROUTE_N; i++) {
+		wp[i][0] = route_mm[i][0];
+		wp[i][1] = route_mm[i][1];
+		if (!motion_cruise_abs(&eng, q(wp[i][0]), q(wp[i][1])))
 			fail(name);
-	if (!ref_cruise(&ref, route_mm, ROUTE_N))
+	}
+	if (!ref_cruise(&ref, (const double(*)[2])wp, ROUTE_N))
 		fail("reference route");
-	double hl = atan2(route_mm[ROUTE_N - 1][1] - route_mm[ROUTE_N - 2][1],
-			  route_mm[ROUTE_N - 1][0] - route_mm[ROUTE_N - 2][0]) *
+	double hl = atan2(wp[ROUTE_N - 1][1] - wp[ROUTE_N - 2][1],
+			  wp[ROUTE_N - 1][0] - wp[ROUTE_N - 2][0]) *
 		    180 / M_PI;
-	run(name, what, (pt_t){route_mm[ROUTE_N - 1][0], route_mm[ROUTE_N - 1][1], hl});
+	run(name, what, (pt_t){wp[ROUTE_N - 1][0], wp[ROUTE_N - 1][1], hl});
 }
 
 int main(void)

@@ -5,7 +5,7 @@
 #include <stdlib.h>
 
 /* Corners from 22 to 117 degrees, both senses, legs of 0.7 to 1.4 m. */
-const double route_mm[ROUTE_N][2] = {
+const int32_t route_mm[ROUTE_N][2] = {
     {1000, 0},	  {2000, 400},	{3000, 0},    {3800, 800}, {3800, 1800},
     {2800, 2300}, {1800, 1800}, {1000, 2400}, {0, 1800},   {0, 800},
 };

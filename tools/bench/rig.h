@@ -26,8 +26,8 @@ void rig_tick_firmware(rig_t *r);
  * exits when max is reached. */
 uint32_t rig_run_idle(rig_t *r, uint32_t max);
 
-/* A 10-waypoint moveCruiseAbs route from (0, 0) heading 0, mm. */
+/* A 10-waypoint moveCruiseAbs route from (0, 0) heading 0, whole mm. */
 #define ROUTE_N 10
-extern const double route_mm[ROUTE_N][2];
+extern const int32_t route_mm[ROUTE_N][2];
 
 #endif

@@ -30,17 +30,18 @@ long bench_scenario(rig_t *r, const char *sc, const bench_hooks_t *h)
 			tick(r, h, "tick");
 	} else if (strcmp(sc, "line") == 0 || strcmp(sc, "line_jerk") == 0) {
 		if (sc[4])
-			need(vehicle_set_jerk(&r->v, 2000.0, 1000.0), "$jerk");
-		need(vs_moveForward(&r->v, 2000.0), "moveForward");
+			need(vehicle_set_jerk(&r->v, VS_REAL(2000.0), VS_REAL(1000.0)), "$jerk");
+		need(vs_moveForward(&r->v, VS_REAL(2000.0)), "moveForward");
 		do
 			tick(r, h, "tick");
 		while (motion_has_work(&r->v.motion));
 	} else if (strcmp(sc, "cruise") == 0 || strcmp(sc, "cruise_jerk") == 0) {
 		bool jerk = sc[6] != 0;
 		if (jerk)
-			need(vehicle_set_jerk(&r->v, 2000.0, 1000.0), "$jerk");
+			need(vehicle_set_jerk(&r->v, VS_REAL(2000.0), VS_REAL(1000.0)), "$jerk");
 		for (int i = 0; i < ROUTE_N; i++)
-			need(vs_moveCruiseAbs(&r->v, (vs_point_t){route_mm[i][0], route_mm[i][1]}),
+			need(vs_moveCruiseAbs(&r->v, (vs_point_t){vs_real_int(route_mm[i][0]),
+								  vs_real_int(route_mm[i][1])}),
 			     "moveCruiseAbs");
 		if (jerk) /* the main loop plans between the requests and the next tick */
 			while (h->plan(r, "plan-ahead"))
@@ -52,20 +53,22 @@ long bench_scenario(rig_t *r, const char *sc, const bench_hooks_t *h)
 		} while (motion_has_work(&r->v.motion));
 	} else if (strcmp(sc, "jog") == 0 || strcmp(sc, "jog_jerk") == 0) {
 		if (sc[3])
-			need(vehicle_set_jerk(&r->v, 2000.0, 1000.0), "$jerk");
+			need(vehicle_set_jerk(&r->v, VS_REAL(2000.0), VS_REAL(1000.0)), "$jerk");
 		for (int i = 0; i < 3000; i++) {
 			if (i % 100 == 0)
-				need(vs_moveJog(&r->v, 300.0, 0.0, 30.0), "moveJog");
+				need(vs_moveJog(&r->v, VS_REAL(300.0), VS_REAL(0.0), VS_REAL(30.0)),
+				     "moveJog");
 			tick(r, h, "tick");
 		}
 	} else if (strcmp(sc, "speed_jerk") == 0) {
-		need(vehicle_set_jerk(&r->v, 2000.0, 1000.0), "$jerk");
-		need(vs_moveForward(&r->v, 3000.0), "moveForward");
+		need(vehicle_set_jerk(&r->v, VS_REAL(2000.0), VS_REAL(1000.0)), "$jerk");
+		need(vs_moveForward(&r->v, VS_REAL(3000.0)), "moveForward");
 		/* Raised on the hold, lowered on the new one: each plans a line
 		 * from the speed held within a tick or two. */
 		for (int i = 0; motion_has_work(&r->v.motion); i++) {
 			if (i == 1500 || i == 2600) {
-				vs_velocity_t s = {i == 1500 ? 800.0 : 300.0, 90.0};
+				vs_velocity_t s = {i == 1500 ? VS_REAL(800.0) : VS_REAL(300.0),
+						   VS_REAL(90.0)};
 				need(vs_setVelocity(&r->v, s), "setVelocity");
 				for (int k = 0; k < 3; k++, i++)
 					tick(r, h, "tick-after-speed");
@@ -77,8 +80,9 @@ long bench_scenario(rig_t *r, const char *sc, const bench_hooks_t *h)
 		 * planned on any of them. */
 		bool jerk = sc[8] != 0;
 		if (jerk)
-			need(vehicle_set_jerk(&r->v, 2000.0, 1000.0), "$jerk");
-		need(vs_moveContinuousRel(&r->v, (vs_position_t){3000.0, 0.0, 0.0}),
+			need(vehicle_set_jerk(&r->v, VS_REAL(2000.0), VS_REAL(1000.0)), "$jerk");
+		need(vs_moveContinuousRel(
+			 &r->v, (vs_position_t){VS_REAL(3000.0), VS_REAL(0.0), VS_REAL(0.0)}),
 		     "moveContinuousRel");
 		for (int k = 0; k < 20; k++) {
 			for (int i = 0; i < 250; i++) {
@@ -88,8 +92,9 @@ long bench_scenario(rig_t *r, const char *sc, const bench_hooks_t *h)
 					rig_tick(r);
 			}
 			/* Alternate left and right goals ahead: a new bearing each time. */
-			double side = (k & 1) ? -400.0 : 400.0;
-			need(h->retarget(r, (vs_position_t){1500.0, side, side / 20.0}, "cmd"),
+			vs_real_t side = (k & 1) ? VS_REAL(-400.0) : VS_REAL(400.0);
+			need(h->retarget(r, (vs_position_t){VS_REAL(1500.0), side, side / 20},
+					 "cmd"),
 			     "moveContinuousRel");
 			tick(r, h, "tick-after-cmd");
 		}
