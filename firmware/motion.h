@@ -124,7 +124,6 @@ typedef struct {
 	bool lim_ok;	/* lim_* below hold for the active piece */
 	bool jerk_any;	/* a jerk is set or limited (j*_pt3 below) */
 
-	motion_cmd_t q[MOTION_QUEUE_LEN];
 	uint8_t q_head, q_count;
 	uint8_t stop_drop;   /* commands stop() discards once at rest (the first) */
 	bool rest_tick;	     /* a piece or (jerk limits) a motion stopped: the next
@@ -146,11 +145,10 @@ typedef struct {
 	 * (sc_on below: it runs) and the last tick's change of speed. */
 	traj_sc_t sc;
 	q32_t acc;
-	/* A line between speeds (ln_on below: it runs; a cruise line, or
-	 * after a new speed limit the line from the speed reached, planned
+	/* A line between speeds (lnb below; ln_on: it runs; a cruise line,
+	 * or after a new speed limit the line from the speed reached, planned
 	 * once the acceleration is zero: glide brings it there at the jerk);
 	 * plan_cap is the limit the running profile was planned for. */
-	traj_ln_t lnb[2]; /* the line running (ln_i) and the one planned ahead */
 	q32_t plan_cap;
 	/* Jerk-limited cruise: a piece's profile is chosen on its first tick
 	 * (fresh below); a corner entered at speed holds it (hold_on, hold_v);
@@ -183,6 +181,13 @@ typedef struct {
 	bool sc_on;		   /* the planned jerk-limited profile runs */
 	bool ln_on, glide, fresh, hold_on, face_ok;
 	uint8_t ln_i, ln_next; /* ln_next: LN_NEXT_* */
+
+	/* The large members last: a Cortex-M loads a 64-bit member in one
+	 * instruction only within 1020 bytes of the struct (ldrd), and the
+	 * scalars above stay within it (1.5 KiB less code with the layout of
+	 * struct vehicle, docs/mcu.md). */
+	traj_ln_t lnb[2]; /* the line running (ln_i) and the one planned ahead */
+	motion_cmd_t q[MOTION_QUEUE_LEN];
 } motion_t;
 
 void motion_init(motion_t *m, const motion_params_t *p);

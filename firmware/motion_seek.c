@@ -67,6 +67,13 @@ typedef struct {
 	int64_t dip;
 } seek_lim_t;
 
+/* x + y for x, y >= 0, saturating (with traj_mul_sat: a few compares where
+ * the overflow builtins' 64-bit products cost a 32-bit core 0.5 KiB). */
+static int64_t add_sat(int64_t x, int64_t y)
+{
+	return x > INT64_MAX - y ? INT64_MAX : x + y;
+}
+
 /* An upper bound on the distance a stop from speed v >= 0 and change
  * acc >= 0 takes at the limits in l, with the room its tail needs: the
  * acceleration to zero at j (g ticks, the speed rising to at most vg),
@@ -79,14 +86,10 @@ typedef struct {
  * Saturates. */
 static q32_t stop_room(q32_t v, q32_t acc, const seek_lim_t *l)
 {
-	int64_t g = (acc + l->j - 1) / l->j, vg, r1, r2;
-	if (__builtin_mul_overflow(acc, g + 1, &vg) || __builtin_add_overflow(v, vg / 2, &vg))
-		return INT64_MAX;
+	int64_t g = (acc + l->j - 1) / l->j;
+	int64_t vg = add_sat(v, traj_mul_sat(acc, g + 1) / 2);
 	int64_t t = vg / l->a + l->a / l->j + 4;
-	if (__builtin_mul_overflow(g + l->dip + 8, vg, &r1) || __builtin_mul_overflow(vg, t, &r2) ||
-	    __builtin_add_overflow(r1, r2 / 2, &r1))
-		return INT64_MAX;
-	return r1;
+	return add_sat(traj_mul_sat(vg, g + l->dip + 8), traj_mul_sat(vg, t) / 2);
 }
 
 /* The tail to rest over dd from speed u: on the line between speeds, its

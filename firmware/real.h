@@ -27,6 +27,7 @@ typedef int64_t vs_real_t;
 #define VS_REAL_ONE  (INT64_C(1) << 32)
 /* Neither NaN nor infinity. */
 #define vs_real_finite(x) ((x) != VS_REAL_NAN)
+#define vs_real_nan(x)	  ((x) == VS_REAL_NAN)
 /* An integer (|i| < 2^31) as a vs_real_t. */
 #define vs_real_int(i) ((vs_real_t)(i)*VS_REAL_ONE)
 #else
@@ -35,6 +36,7 @@ typedef double vs_real_t;
 #define VS_REAL_ONE	  1.0
 /* Not NaN, not infinite (libc-free). */
 #define vs_real_finite(x) ((x) == (x) && (x) >= -1e300 && (x) <= 1e300)
+#define vs_real_nan(x)	  ((x) != (x))
 #define vs_real_int(i)	  ((double)(i))
 #endif
 

@@ -207,6 +207,8 @@ q32_t traj_sc_next(traj_sc_t *p);
 /* An upper bound on traj_sc_plan's ticks for d (> 0) at a and j with no
  * speed cap. */
 int64_t traj_sc_ticks_bound(q32_t d, q32_t a, q32_t j);
+/* x y for x >= 0, y > 0, saturating at INT64_MAX. */
+int64_t traj_mul_sat(int64_t x, int64_t y);
 /* A planned jerk-limited line between speeds and its sampler (section 6). */
 typedef struct {
 	traj_sc_t ramp;		    /* the ramp running (phases 0 and 2) */

@@ -5,10 +5,9 @@
  * remainders below P in pairs. */
 #define SC_P_LIMIT ((int64_t)1 << 62)
 
-/* x y for x, y > 0, saturating. Out of line: it is called from the
- * search's loop, and inlined copies of 64-bit arithmetic cost flash on a
- * 32-bit core. */
-static __attribute__((noinline)) int64_t mul_sat(int64_t x, int64_t y)
+/* Out of line: it is called from the search's loop, and inlined copies of
+ * 64-bit arithmetic cost flash on a 32-bit core. */
+__attribute__((noinline)) int64_t traj_mul_sat(int64_t x, int64_t y)
 {
 	/* Both below 2^31: the product fits, no division (a library call of
 	 * some 100 instructions on a 32-bit core). */
@@ -54,8 +53,8 @@ static __attribute__((noinline)) int64_t sc_nv(const traj_sc_t *p, int64_t d, in
 					       int64_t na, int64_t nj)
 {
 	int64_t nv = fx_max64(nv_v, na + nj);
-	nv = fx_max64(nv, ceil_div(d, mul_sat(p->am, na)));
-	return fx_max64(nv, ceil_div(d, mul_sat(mul_sat(p->jm, na), nj)));
+	nv = fx_max64(nv, ceil_div(d, traj_mul_sat(p->am, na)));
+	return fx_max64(nv, ceil_div(d, traj_mul_sat(traj_mul_sat(p->jm, na), nj)));
 }
 
 /* The continuous optimum's jerk and acceleration phases in whole ticks
@@ -88,7 +87,8 @@ bool traj_sc_plan(traj_sc_t *p, q32_t d, q32_t v, q32_t a, q32_t j)
 			if (na < nj)
 				continue;
 			int64_t nv = sc_nv(p, d, nv_v, na, nj);
-			if (mul_sat(mul_sat(nv, na), nj) >= SC_P_LIMIT || nv + na + nj >= best)
+			if (traj_mul_sat(traj_mul_sat(nv, na), nj) >= SC_P_LIMIT ||
+			    nv + na + nj >= best)
 				continue;
 			best = nv + na + nj;
 			p->nv = nv;
@@ -167,7 +167,7 @@ static void ramp_shape(int64_t delta, int64_t am, int64_t jm, int64_t *na, int64
 	int64_t best = INT64_MAX;
 	for (int64_t t = fx_max64(t0 - 1, 1); t <= t0 + 2; t++) {
 		int64_t n = fx_max64(t, ceil_div(delta, am));
-		n = fx_max64(n, ceil_div(delta, mul_sat(jm, t)));
+		n = fx_max64(n, ceil_div(delta, traj_mul_sat(jm, t)));
 		if (n + t < best) {
 			best = n + t;
 			*na = n;
@@ -179,7 +179,7 @@ static void ramp_shape(int64_t delta, int64_t am, int64_t jm, int64_t *na, int64
 /* True when boxes na, nj carry a ramp of delta within am and jm. */
 static bool ramp_serves(int64_t delta, int64_t am, int64_t jm, int64_t na, int64_t nj)
 {
-	return delta <= mul_sat(am, na) && delta <= mul_sat(mul_sat(jm, na), nj);
+	return delta <= traj_mul_sat(am, na) && delta <= traj_mul_sat(traj_mul_sat(jm, na), nj);
 }
 
 /* The ramp of delta on boxes na, nj (delta = 0: none) as the rise of an
@@ -197,9 +197,9 @@ static void ramp_start(traj_sc_t *s, int64_t delta, int64_t na, int64_t nj)
 static int64_t ln_dist(const traj_ln_t *p, int64_t w, int64_t k)
 {
 	int64_t d1 = w - p->cin, l1 = p->na1 + p->nj1 - 1, l2 = p->na2 + p->nj2 - 1;
-	int64_t r1 = mul_sat(fx_abs64(d1), p->na1 + p->nj1) / 2;
-	int64_t r2 = mul_sat(w - p->cout, p->na2 + p->nj2) / 2;
-	return p->cin * l1 + (d1 < 0 ? -r1 : r1) + mul_sat(w, k + l2) - r2;
+	int64_t r1 = traj_mul_sat(fx_abs64(d1), p->na1 + p->nj1) / 2;
+	int64_t r2 = traj_mul_sat(w - p->cout, p->na2 + p->nj2) / 2;
+	return p->cin * l1 + (d1 < 0 ? -r1 : r1) + traj_mul_sat(w, k + l2) - r2;
 }
 
 /* The ramps' boxes for line speed w (one at least, so that L >= 1). */

@@ -161,11 +161,9 @@ bool vehicle_motion_refused(vehicle_t *v, const char *op, bool velocity_mode);
 
 /* Implementation detail: static allocation by the caller, fields private. */
 struct vehicle {
-	vs_config_t cfg;
 	vs_hal_t hal;
-	motion_t motion;
+	motion_t motion; /* first: its scalars within reach of one load (motion.h) */
 	kin_t kin;
-	alarm_list_t alarms;
 	fx_pose_t odom;
 	fx_trig_cache_t odom_trig; /* odometry's last heading */
 	uint8_t naxes;
@@ -206,6 +204,9 @@ struct vehicle {
 	 * (past settle_timeout_ticks: warning 154 raised, taken as done). */
 	uint32_t inpos_ticks, settle_ticks;
 	char state_msg[VS_STATE_MSG_MAX];
+	/* Large and seldom read: last. */
+	alarm_list_t alarms;
+	vs_config_t cfg;
 };
 
 #endif

@@ -23,7 +23,7 @@
 /* Finite and |x| <= lim. */
 static bool within(vs_real_t x, vs_real_t lim)
 {
-	return vs_real_finite(x) && x >= -lim && x <= lim;
+	return !vs_real_nan(x) && x >= -lim && x <= lim;
 }
 
 #ifdef VS_REAL_Q32

@@ -439,9 +439,8 @@ np_result_t np_parse_q32(const char *s, int64_t *out)
 
 size_t np_fmt_q32_fixed3(int64_t v, char *buf)
 {
-	uint64_t m = v < 0 ? 0u - (uint64_t)v : (uint64_t)v;
-	uint64_t t = (m & 0xffffffffu) * 1000u, r = t & 0xffffffffu;
-	uint64_t q = (m >> 32) * 1000u + (t >> 32);
+	uint64_t m = v < 0 ? 0u - (uint64_t)v : (uint64_t)v, t = (m & 0xffffffffu) * 1000u;
+	uint32_t ip = (uint32_t)(m >> 32), f = (uint32_t)(t >> 32), r = (uint32_t)t;
 	size_t n = 0;
 
 	if (v == Q32_NAN) {
@@ -450,43 +449,40 @@ size_t np_fmt_q32_fixed3(int64_t v, char *buf)
 	}
 	if (v < 0)
 		buf[n++] = '-';
-	/* Thousandths rounded to nearest, ties to even, as "%.3f" rounds
-	 * the same value as a double. */
-	if (r > 0x80000000u || (r == 0x80000000u && (q & 1u)))
-		q++;
-	n += np_fmt_u64(q / 1000u, buf + n);
+	/* Thousandths rounded to nearest, ties to even (1000 is even: the
+	 * parity is f's), as "%.3f" rounds the same value as a double. */
+	if (r > 0x80000000u || (r == 0x80000000u && (f & 1u)))
+		f++;
+	if (f == 1000u) {
+		f = 0;
+		ip++; /* at most 2^31 */
+	}
+	n += np_fmt_u64(ip, buf + n);
 	buf[n++] = '.';
-	buf[n++] = (char)('0' + q / 100u % 10u);
-	buf[n++] = (char)('0' + q / 10u % 10u);
-	buf[n++] = (char)('0' + q % 10u);
+	buf[n++] = (char)('0' + f / 100u);
+	buf[n++] = (char)('0' + f / 10u % 10u);
+	buf[n++] = (char)('0' + f % 10u);
 	buf[n] = '\0';
 	return n;
 }
 
 int64_t np_q32_from_ieee(uint64_t b)
 {
-	int ex = (int)((b >> 52) & 0x7ffu), s;
-	uint64_t m = b & (NP_2P53 / 2u - 1u), q;
+	int ex = (int)(b >> 52) & 0x7ff;
+	uint64_t m = (b & (NP_2P53 / 2u - 1u)) | (uint64_t)(ex != 0) << 52, q;
+	/* value = m * 2^(ex - 1075), so Q32 = m * 2^s */
+	int s = (ex ? ex : 1) - 1075 + 32;
 
 	if (ex == 0x7ff)
 		return Q32_NAN;
-	if (ex)
-		m |= NP_2P53 / 2u;
-	/* value = m * 2^(ex - 1075), so Q32 = m * 2^s */
-	s = (ex ? ex : 1) - 1075 + 32;
-	if (m == 0 || s < -63) {
-		q = 0; /* below 2^-33: rounds to zero */
-	} else if (s >= 0) {
-		if (s > 10) /* m * 2^s >= 2^63 */
-			return b >> 63 ? -Q32_SAT : Q32_SAT;
+	if (s > 10) /* m * 2^s >= 2^63 */
+		return b >> 63 ? -Q32_SAT : Q32_SAT;
+	if (s >= 0)
 		q = m << s;
-	} else {
-		uint64_t rem = m & ((UINT64_C(1) << -s) - 1u);
-
-		q = m >> -s;
-		if (rem >= UINT64_C(1) << (-s - 1)) /* half away from zero */
-			q++;
-	}
+	else if (s < -64) /* below 2^-33: rounds to zero */
+		q = 0;
+	else /* the last bit shifted out rounds: half away from zero */
+		q = ((m >> (-s - 1)) + 1u) >> 1;
 	return b >> 63 ? -(int64_t)q : (int64_t)q;
 }
 
@@ -501,20 +497,17 @@ uint64_t np_q32_to_ieee(int64_t v)
 		return UINT64_C(0x7ff8000000000000);
 	p = 63 - __builtin_clzll(m);
 	if (p > 52) {
-		/* round to 53 bits, ties to even, as int64 -> double does */
+		/* to 53 bits, ties to even, as int64 -> double rounds */
 		int sh = p - 52;
-		uint64_t rem = m & ((UINT64_C(1) << sh) - 1u), half = UINT64_C(1) << (sh - 1);
+		uint64_t lost = m << (64 - sh), half = UINT64_C(1) << 63;
 
 		m >>= sh;
-		if (rem > half || (rem == half && (m & 1u)))
+		if (lost > half || (lost == half && (m & 1u)))
 			m++;
-		if (m >> 53) {
-			m >>= 1;
-			p++;
-		}
 	} else {
 		m <<= 52 - p;
 	}
-	/* value = v * 2^-32: exponent p - 32 */
-	return sign | (uint64_t)(p - 32 + 1023) << 52 | (m & (NP_2P53 / 2u - 1u));
+	/* value = v * 2^-32, exponent p - 32; m's leading bit (bit 52, or 53
+	 * when the rounding carried) adds itself to the exponent field */
+	return sign | (((uint64_t)(p - 32 + 1022) << 52) + m);
 }
