@@ -198,8 +198,11 @@ static int report(const char **name, const char *field, int code)
  * field, or 0. */
 static int cross_rules(const vs_config_t *c, unsigned bad, const char **name)
 {
-	if (bad > ROW(wheel_base_mm) && c->kinematics == VS_KIN_OMNI &&
-	    !(c->wheel_base_mm >= VS_REAL(50.0)))
+#ifdef VS_KIN_ONLY
+	if (c->kinematics != VS_KIN_ONLY) /* built for the other base (the first row) */
+		return report(name, "kinematics", -1);
+#endif
+	if (bad > ROW(wheel_base_mm) && vs_config_omni(c) && !(c->wheel_base_mm >= VS_REAL(50.0)))
 		return report(name, "wheel_base_mm", -1);
 	if (bad >= ROW(vel_default_t_mm_s) &&
 	    !positive_upto(c->vel_default_t_mm_s, c->vel_limit_t_mm_s))
@@ -238,7 +241,7 @@ static int cross_rules(const vs_config_t *c, unsigned bad, const char **name)
  * position loop's correction) must fit the HAL's int32. */
 static bool setpoint_fits(const vs_config_t *c)
 {
-	bool omni = c->kinematics == VS_KIN_OMNI;
+	bool omni = vs_config_omni(c);
 #ifdef VS_REAL_Q32
 	/* The same sum in Q32, against the speed the limit allows: every term
 	 * is bounded by the ranges above (the largest, vel_r * half, 2^56). */

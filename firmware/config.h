@@ -135,10 +135,19 @@ double vs_config_get(const vs_config_t *c, const vs_config_field_t *f, unsigned 
 void vs_config_set(vs_config_t *c, const vs_config_field_t *f, unsigned k, double v);
 #endif
 
+/* Whether c is a mecanum base. A build for one base (-DVS_KIN_ONLY=0
+ * differential, 1 mecanum: a board, whose configuration is compiled in)
+ * keeps that base's code only, and vs_config_check refuses the other. */
+#ifdef VS_KIN_ONLY
+#define vs_config_omni(c) ((void)(c), VS_KIN_ONLY == VS_KIN_OMNI)
+#else
+#define vs_config_omni(c) ((c)->kinematics == VS_KIN_OMNI)
+#endif
+
 /* Number of wheel axes for a kinematics type. */
 static inline uint8_t vs_config_axes(const vs_config_t *c)
 {
-	return c->kinematics == VS_KIN_OMNI ? 4 : 2;
+	return vs_config_omni(c) ? 4 : 2;
 }
 
 /* Fills a configuration with the reference differential base's values. */

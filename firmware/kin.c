@@ -7,7 +7,7 @@ void kin_init(kin_t *k, const kin_params_t *p)
 {
 	*k = (kin_t){0};
 	k->p = *p;
-	k->p.n = p->kin == MOTION_KIN_OMNI ? 4 : 2;
+	k->p.n = KIN_OMNI(p->kin) ? 4 : 2;
 	/* 2^16 / counts_per_mm in Q32 is mm per count in Q48. */
 	k->mm_per_count_q48 = p->counts_per_mm > 0 ? fx_div((q32_t)1 << 48, p->counts_per_mm) : 0;
 	k->counts_per_deg = fx_mul(p->mm_per_deg, p->counts_per_mm);
@@ -16,7 +16,7 @@ void kin_init(kin_t *k, const kin_params_t *p)
 void kin_body_to_wheels(const kin_params_t *p, const fx_twist_t *b, q32_t w[])
 {
 	q32_t rot = fx_mul(b->w_pt, p->mm_per_deg);
-	if (p->kin == MOTION_KIN_OMNI) {
+	if (KIN_OMNI(p->kin)) {
 		w[0] = b->vx_pt - b->vy_pt - rot;
 		w[1] = b->vx_pt + b->vy_pt + rot;
 		w[2] = b->vx_pt + b->vy_pt - rot;
@@ -29,7 +29,7 @@ void kin_body_to_wheels(const kin_params_t *p, const fx_twist_t *b, q32_t w[])
 
 void kin_wheels_to_body(const kin_params_t *p, const q32_t w[], fx_twist_t *b)
 {
-	if (p->kin == MOTION_KIN_OMNI) {
+	if (KIN_OMNI(p->kin)) {
 		b->vx_pt = (w[0] + w[1] + w[2] + w[3]) / 4;
 		b->vy_pt = (-w[0] + w[1] + w[2] - w[3]) / 4;
 		b->w_pt = fx_mul((-w[0] + w[1] - w[2] + w[3]) / 4, p->deg_per_mm);
@@ -97,7 +97,7 @@ void kin_step(kin_t *k, const fx_twist_t *body, const int32_t meas[], int32_t ou
 	q32_t r = body->w_pt ? fx_mul_fit(body->w_pt, k->counts_per_deg) : 0;
 	/* The wheel count is fixed by the kinematics (kin_init): each form is
 	 * written out whole, with no per-wheel table. */
-	if (k->p.kin == MOTION_KIN_OMNI) {
+	if (KIN_OMNI(k->p.kin)) {
 		q32_t y = body->vy_pt ? fx_mul_fit(body->vy_pt, k->p.counts_per_mm) : 0;
 		for (uint8_t i = 0; i < 4; i++)
 			d[i] = wheel_delta(k, i, meas, &mm[i]);

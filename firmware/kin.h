@@ -42,6 +42,13 @@ typedef enum {
 	MOTION_KIN_OMNI = 1,
 } motion_kin_t;
 
+/* Whether kin is mecanum (a build for one base knows: config.h). */
+#ifdef VS_KIN_ONLY
+#define KIN_OMNI(kin) ((void)(kin), VS_KIN_ONLY == MOTION_KIN_OMNI)
+#else
+#define KIN_OMNI(kin) ((kin) == MOTION_KIN_OMNI)
+#endif
+
 #define KIN_MAX_WHEELS 4
 
 typedef struct {

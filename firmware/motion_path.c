@@ -271,7 +271,7 @@ static stage_t command_stage(motion_t *m, motion_cmd_t *c)
 	case MCMD_ARC:
 		return arc_stage(m, c);
 	case MCMD_LINE:
-		if (m->p.kin == MOTION_KIN_OMNI)
+		if (KIN_OMNI(m->p.kin))
 			return line_stage_omni(m, c);
 		return line_stage_diff(m, c);
 	case MCMD_CRUISE:
@@ -465,7 +465,7 @@ static void twist_between(const motion_t *m, const fx_pose_t *a, const fx_pose_t
 	int32_t c, s;
 	fx_sincos_bam(mid, &s, &c);
 	t->vx_pt = fx_mul_q30(dx, c) + fx_mul_q30(dy, s);
-	t->vy_pt = m->p.kin == MOTION_KIN_OMNI ? fx_mul_q30(dy, c) - fx_mul_q30(dx, s) : 0;
+	t->vy_pt = KIN_OMNI(m->p.kin) ? fx_mul_q30(dy, c) - fx_mul_q30(dx, s) : 0;
 	t->w_pt = dth;
 }
 
@@ -999,7 +999,7 @@ static void path_tick(motion_t *m, fx_twist_t *out)
 		if (!piece_finish(m) || budget == 0)
 			break;
 	}
-	if (along && m->p.kin == MOTION_KIN_DIFF) {
+	if (along && !KIN_OMNI(m->p.kin)) {
 		/* The path length at the step's heading change; the odometry
 		 * integrates it at the midpoint heading, as the corner's own
 		 * integration does. Lines here all run the same way: only cruise

@@ -45,7 +45,7 @@
 #define TINY_MM	 ((q32_t)4295) /* 1e-6 mm: below this a line has no length */
 #define TINY_DEG ((q32_t)4295) /* 1e-6 deg */
 
-static inline motion_cmd_t *q_at(motion_t *m, uint8_t i)
+FX_HELPER motion_cmd_t *q_at(motion_t *m, uint8_t i)
 {
 	return &m->q[(uint8_t)(m->q_head + i) % MOTION_QUEUE_LEN];
 }
@@ -86,7 +86,7 @@ static inline __attribute__((always_inline)) void pop(motion_t *m)
  * no product passes 2^62): a mecanum base's translation axes each get this
  * share of the limits under a jerk limit, so that the vector never exceeds
  * them. 2^30 / sqrt(2) rounded down is 759250124. */
-static inline q32_t motion_share(q32_t x)
+FX_HELPER q32_t motion_share(q32_t x)
 {
 	const int64_t k = 759250124, lo = x & ((1 << 30) - 1);
 	return (x >> 30) * k + ((lo * k) >> 30);

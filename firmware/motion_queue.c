@@ -81,7 +81,7 @@ bool motion_circular_rel(motion_t *m, q32_t cx_mm, q32_t cy_mm, q32_t angle_deg)
 {
 	motion_cmd_t c = {0};
 	q32_t dx, dy;
-	if (m->p.kin == MOTION_KIN_DIFF && cx_mm != 0)
+	if (!KIN_OMNI(m->p.kin) && cx_mm != 0)
 		return false;
 	motion_body_to_world(m->ref.th_deg, cx_mm, cy_mm, &dx, &dy);
 	c.kind = MCMD_ARC;

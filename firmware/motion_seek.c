@@ -55,7 +55,7 @@ static inline void from_axes(const motion_t *m, fx_twist_t *vel)
 
 /* A jerk of 0 (unlimited on that axis): one that lets the acceleration
  * swing from -a to a in a tick, the acceleration-limited law. */
-static q32_t jerk_or(q32_t j, q32_t a)
+FX_HELPER q32_t jerk_or(q32_t j, q32_t a)
 {
 	return j > 0 ? j : 2 * a + 8;
 }
@@ -86,9 +86,9 @@ static int64_t add_sat(int64_t x, int64_t y)
  * Saturates. */
 static q32_t stop_room(q32_t v, q32_t acc, const seek_lim_t *l)
 {
-	int64_t g = (acc + l->j - 1) / l->j;
+	int64_t g = fx_div_nn(acc + l->j - 1, l->j);
 	int64_t vg = add_sat(v, traj_mul_sat(acc, g + 1) / 2);
-	int64_t t = vg / l->a + l->a / l->j + 4;
+	int64_t t = fx_div_nn(vg, l->a) + fx_div_nn(l->a, l->j) + 4;
 	return add_sat(traj_mul_sat(vg, g + l->dip + 8), traj_mul_sat(vg, t) / 2);
 }
 
@@ -200,7 +200,7 @@ static void seek_brake(motion_t *m, fx_twist_t *vel, fx_twist_t *acc)
 	q32_t at = m->amax_t_pt2, jt = jerk_or(m->jmax_t_pt3, at);
 	q32_t ar = m->amax_r_pt2, jr = jerk_or(m->jmax_r_pt3, ar);
 	m->sk_on[0] = m->sk_on[1] = false;
-	if (m->p.kin == MOTION_KIN_OMNI) {
+	if (KIN_OMNI(m->p.kin)) {
 		at = fx_max64(motion_share(at), 1);
 		jt = fx_max64(motion_share(jt), 1);
 		for (int i = 0; i < 2; i++)
@@ -273,7 +273,7 @@ void motion_seek_retarget(motion_t *m)
 	m->sk_on[0] = m->sk_on[1] = false;
 	m->ln_next = LN_NEXT_NONE; /* the line buffers serve the tails now */
 	/* The dips' bound (stop_room) for a tick's distance at the limit. */
-	bool omni = m->p.kin == MOTION_KIN_OMNI;
+	bool omni = KIN_OMNI(m->p.kin);
 	seek_lim_t lt = lim_t(m, 0, omni), lr = lim_r(m);
 	m->sk_dip[0] = traj_sc_ticks_bound(m->vmax_t_pt, lt.a, lt.j);
 	m->sk_dip[1] = traj_sc_ticks_bound(m->vmax_r_pt, lr.a, lr.j);
@@ -308,7 +308,7 @@ void motion_seek_tick(motion_t *m, fx_twist_t *out)
 	fx_twist_t vel = m->vel, acc = m->vacc;
 	q32_t wx = m->goal.x_mm - m->ref.x_mm, wy = m->goal.y_mm - m->ref.y_mm;
 	q32_t dist = fx_hypot(wx, wy);
-	bool omni = m->p.kin == MOTION_KIN_OMNI;
+	bool omni = KIN_OMNI(m->p.kin);
 	if (braking) {
 		seek_brake(m, &vel, &acc);
 	} else if (m->goal_position_done) {

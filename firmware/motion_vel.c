@@ -68,12 +68,12 @@ void motion_joystick_input(motion_t *m, int16_t x, int16_t y, int16_t r, bool pr
 		return;
 	}
 	m->vtarget.vx_pt = vt_eff(m) / 32767 * x;
-	m->vtarget.vy_pt = m->p.kin == MOTION_KIN_OMNI ? vt_eff(m) / 32767 * y : 0;
+	m->vtarget.vy_pt = KIN_OMNI(m->p.kin) ? vt_eff(m) / 32767 * y : 0;
 	m->vtarget.w_pt = m->v_r_pt / 32767 * r;
 }
 
 /* Move x toward target by at most step. */
-static q32_t slew(q32_t x, q32_t target, q32_t step)
+FX_HELPER q32_t slew(q32_t x, q32_t target, q32_t step)
 {
 	if (target > x + step)
 		return x + step;
@@ -123,7 +123,7 @@ static void jerk_slew(motion_t *m, const fx_twist_t *tgt, q32_t at, q32_t ar, bo
 {
 	q32_t jt = braking ? m->jmax_t_pt3 : m->j_t_pt3;
 	q32_t jr = braking ? m->jmax_r_pt3 : m->j_r_pt3;
-	if (jt > 0 && m->p.kin == MOTION_KIN_OMNI) {
+	if (jt > 0 && KIN_OMNI(m->p.kin)) {
 		at = motion_share(at);
 		jt = motion_share(jt);
 		traj_jslew(&m->vel.vy_pt, &m->vacc.vy_pt, tgt->vy_pt, at, jt);
@@ -213,7 +213,7 @@ static void goal_want(motion_t *m, q32_t dx, q32_t dy, q32_t dist, fx_twist_t *w
 	if (!m->goal_position_done) {
 		q32_t bearing = fx_atan2_deg(dy, dx);
 		q32_t e = fx_wrap_deg(bearing - m->ref.th_deg);
-		if (m->p.kin == MOTION_KIN_OMNI) {
+		if (KIN_OMNI(m->p.kin)) {
 			q32_t sp = fx_min64(traj_umax(dist, m->a_t_pt2), vt_eff(m));
 			uint32_t b = fx_deg_to_bam(e);
 			want->vx_pt = fx_mul_q30(sp, fx_cos_bam(b));
@@ -277,7 +277,7 @@ void motion_continuous_tick(motion_t *m, fx_twist_t *out)
 	/* Never step past the goal: the last step covers the exact remainder
 	 * (backing up, the same with the signs turned). */
 	q32_t dir = m->goal_reverse ? -1 : 1;
-	if (!m->goal_position_done && dir * m->vel.vx_pt > dist && m->p.kin == MOTION_KIN_DIFF)
+	if (!m->goal_position_done && dir * m->vel.vx_pt > dist && !KIN_OMNI(m->p.kin))
 		m->vel.vx_pt = dir * fx_max64(dist, dir * v0.vx_pt - at);
 	/* The change of velocity, which a jog that takes over slews on
 	 * from. */

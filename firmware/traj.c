@@ -1,14 +1,8 @@
 /* Trajectory generation (derivation in traj.h). */
 #include "traj.h"
 
-/* T(n) = a n (n + 1) / 2 */
-#ifdef __OPTIMIZE_SIZE__
-/* Out of line where code size counts: on a 32-bit core its 64-bit
- * products take some 30 bytes at each of nine calls. */
-__attribute__((noinline))
-#endif
-static q32_t
-tri(int64_t n, q32_t a)
+/* T(n) = a n (n + 1) / 2 (fx.h: FX_HELPER) */
+FX_HELPER q32_t tri(int64_t n, q32_t a)
 {
 	return (n * (n + 1) / 2) * a;
 }

@@ -17,13 +17,13 @@ __attribute__((noinline)) int64_t traj_mul_sat(int64_t x, int64_t y)
 }
 
 /* ceil(n / m) for n > 0, m > 0. */
-static int64_t ceil_div(int64_t n, int64_t m)
+FX_HELPER int64_t ceil_div(int64_t n, int64_t m)
 {
-	return (n - 1) / m + 1;
+	return fx_div_nn(n - 1, m) + 1;
 }
 
 /* Floor of the cube root, one bit of the root per step. */
-static int64_t icbrt(uint64_t x)
+FX_HELPER int64_t icbrt(uint64_t x)
 {
 	uint64_t y = 0;
 	for (int s = 63; s >= 0; s -= 3) {
@@ -61,13 +61,14 @@ static __attribute__((noinline)) int64_t sc_nv(const traj_sc_t *p, int64_t d, in
  * (traj.h): the search looks around them. */
 static void sc_guess(const traj_sc_t *p, int64_t d, int64_t *tj, int64_t *ta)
 {
-	int64_t j = p->am / p->jm; /* the acceleration limit is reached */
-	j = fx_min64(j, (int64_t)fx_isqrt64((uint64_t)(p->vm / p->jm))); /* only the speed */
-	j = fx_min64(j, icbrt((uint64_t)(d / (2 * p->jm))));		 /* neither */
+	int64_t j = fx_div_nn(p->am, p->jm); /* the acceleration limit is reached */
+	j = fx_min64(j,
+		     (int64_t)fx_isqrt64((uint64_t)fx_div_nn(p->vm, p->jm))); /* only the speed */
+	j = fx_min64(j, icbrt((uint64_t)fx_div_nn(d, 2 * p->jm)));	      /* neither */
 	j = fx_max64(j, 1);
-	int64_t a = p->vm / p->am;
+	int64_t a = fx_div_nn(p->vm, p->am);
 	/* Acceleration reached, speed not: d = A ta (ta + tj). */
-	uint64_t q = (uint64_t)fx_min64(d / p->am, (int64_t)1 << 60);
+	uint64_t q = (uint64_t)fx_min64(fx_div_nn(d, p->am), (int64_t)1 << 60);
 	int64_t b = ((int64_t)fx_isqrt64((uint64_t)(j * j) + 4 * q) - j) / 2;
 	*tj = j;
 	*ta = fx_max64(j, fx_min64(a, b));
@@ -118,7 +119,7 @@ static int sc_pulse(const traj_sc_t *p, int64_t k)
 }
 
 /* (q, r) += (dq, dr) over p, with r and dr in [0, p). */
-static inline void qr_add(int64_t *q, int64_t *r, int64_t dq, int64_t dr, int64_t p)
+FX_HELPER void qr_add(int64_t *q, int64_t *r, int64_t dq, int64_t dr, int64_t p)
 {
 	*q += dq;
 	*r += dr;
@@ -163,10 +164,11 @@ q32_t traj_jslew(q32_t *v, q32_t *acc, q32_t target, q32_t amax, q32_t j)
  * change the speed by delta (> 0) within am and jm. */
 static void ramp_shape(int64_t delta, int64_t am, int64_t jm, int64_t *na, int64_t *nj)
 {
-	int64_t t0 = fx_min64(am / jm, (int64_t)fx_isqrt64((uint64_t)(delta / jm)));
-	int64_t best = INT64_MAX;
+	int64_t t0 =
+	    fx_min64(fx_div_nn(am, jm), (int64_t)fx_isqrt64((uint64_t)fx_div_nn(delta, jm)));
+	int64_t best = INT64_MAX, na0 = ceil_div(delta, am);
 	for (int64_t t = fx_max64(t0 - 1, 1); t <= t0 + 2; t++) {
-		int64_t n = fx_max64(t, ceil_div(delta, am));
+		int64_t n = fx_max64(t, na0);
 		n = fx_max64(n, ceil_div(delta, traj_mul_sat(jm, t)));
 		if (n + t < best) {
 			best = n + t;
@@ -184,7 +186,7 @@ static bool ramp_serves(int64_t delta, int64_t am, int64_t jm, int64_t na, int64
 
 /* The ramp of delta on boxes na, nj (delta = 0: none) as the rise of an
  * S-curve that never comes down (traj.h, section 6). */
-static void ramp_start(traj_sc_t *s, int64_t delta, int64_t na, int64_t nj)
+FX_HELPER void ramp_start(traj_sc_t *s, int64_t delta, int64_t na, int64_t nj)
 {
 	*s = (traj_sc_t){.nv = INT64_MAX / 4, .na = na, .nj = nj, .ticks = INT64_MAX};
 	s->p = na * nj;

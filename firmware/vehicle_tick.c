@@ -280,9 +280,7 @@ static void feed_joystick(vehicle_t *v)
 	int16_t x = 0, y = 0, r = 0;
 	if (v->servo && !v->locked && !v->stuck) {
 		x = deadband(js.axis[0], v->joystick_deadband_q15);
-		y = v->cfg.kinematics == VS_KIN_OMNI
-			? deadband(js.axis[1], v->joystick_deadband_q15)
-			: 0;
+		y = vs_config_omni(&v->cfg) ? deadband(js.axis[1], v->joystick_deadband_q15) : 0;
 		r = deadband(js.axis[2], v->joystick_deadband_q15);
 	}
 	motion_joystick_input(&v->motion, x, y, r, true);
@@ -330,8 +328,7 @@ static void hold_pose(vehicle_t *v)
 	fx_sincos_bam(fx_deg_to_bam(v->odom.th_deg), &s, &c);
 	kin_pending(&v->kin, &d);
 	e.vx_pt = fx_mul_q30(ex, c) + fx_mul_q30(ey, s) - d.vx_pt;
-	e.vy_pt =
-	    v->cfg.kinematics == VS_KIN_OMNI ? fx_mul_q30(ey, c) - fx_mul_q30(ex, s) - d.vy_pt : 0;
+	e.vy_pt = vs_config_omni(&v->cfg) ? fx_mul_q30(ey, c) - fx_mul_q30(ex, s) - d.vy_pt : 0;
 	e.w_pt = fx_wrap_deg(r->th_deg - v->odom.th_deg) - d.w_pt;
 	kin_offset(&v->kin, &e);
 }

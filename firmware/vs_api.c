@@ -21,7 +21,7 @@
 #define PI_D	      3.14159265358979323846
 
 /* Finite and |x| <= lim. */
-static bool within(vs_real_t x, vs_real_t lim)
+FX_HELPER bool within(vs_real_t x, vs_real_t lim)
 {
 	return !vs_real_nan(x) && x >= -lim && x <= lim;
 }
@@ -99,7 +99,7 @@ static motion_kin_t init_motion(vehicle_t *v, const vs_config_t *cfg)
 {
 	motion_params_t mp = {
 	    .tick_hz = cfg->tick_hz,
-	    .kin = cfg->kinematics == VS_KIN_OMNI ? MOTION_KIN_OMNI : MOTION_KIN_DIFF,
+	    .kin = vs_config_omni(cfg) ? MOTION_KIN_OMNI : MOTION_KIN_DIFF,
 	    .vel_limit_t = to_q32(cfg->vel_limit_t_mm_s),
 	    .vel_limit_r = to_q32(cfg->vel_limit_r_deg_s),
 	    .acc_limit_t = to_q32(cfg->acc_limit_t_mm_s2),
@@ -123,9 +123,8 @@ static motion_kin_t init_motion(vehicle_t *v, const vs_config_t *cfg)
  * the supervision limits are counted in. */
 static vs_real_t init_kin(vehicle_t *v, const vs_config_t *cfg, motion_kin_t kin)
 {
-	vs_real_t twice_half = cfg->kinematics == VS_KIN_OMNI
-				   ? cfg->wheel_base_mm + cfg->track_width_mm
-				   : cfg->track_width_mm;
+	vs_real_t twice_half =
+	    vs_config_omni(cfg) ? cfg->wheel_base_mm + cfg->track_width_mm : cfg->track_width_mm;
 #ifdef VS_REAL_Q32
 	q32_t counts_per_mm = fx_div(vs_real_int(cfg->encoder_counts_per_rev),
 				     fx_mul(VS_REAL(PI_D), cfg->wheel_diameter_mm));
@@ -382,7 +381,7 @@ bool vs_moveCircularRel(vehicle_t *v, vs_point_t centerPoint, vs_real_t theta)
 	    !within(theta, ANGLE_MAX_DEG))
 		return vehicle_refuse(v, op, ALM_W_BAD_ARGUMENT);
 	/* A differential base can only turn about a point on its axle line. */
-	if (v->cfg.kinematics == VS_KIN_DIFF && centerPoint.x != 0)
+	if (!vs_config_omni(&v->cfg) && centerPoint.x != 0)
 		return vehicle_refuse(v, op, ALM_W_KINEMATICS);
 	if (!vehicle_move_gate(v, op, VEHICLE_GATE_READY))
 		return false;
@@ -439,7 +438,7 @@ bool vs_moveJog(vehicle_t *v, vs_real_t xVel, vs_real_t yVel, vs_real_t thetaVel
 	if (!within(xVel, v->cfg.vel_limit_t_mm_s) || !within(yVel, v->cfg.vel_limit_t_mm_s) ||
 	    !within(thetaVel, v->cfg.vel_limit_r_deg_s))
 		return vehicle_refuse(v, op, ALM_W_OVER_LIMIT);
-	if (v->cfg.kinematics == VS_KIN_DIFF && yVel != 0)
+	if (!vs_config_omni(&v->cfg) && yVel != 0)
 		return vehicle_refuse(v, op, ALM_W_KINEMATICS);
 	if (!vehicle_move_gate(v, op, VEHICLE_GATE_JOG))
 		return false;

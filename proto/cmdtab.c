@@ -23,15 +23,15 @@ enum {
 /* A build short of flash (the Cortex-M4 board) leaves out the help lines:
  * $help NAME then gives the signature alone. */
 #ifdef VS_NO_HELP_TEXT
-#define CMD_HELP(h) ""
+#define CMD_HELP(h)
 #else
-#define CMD_HELP(h) h
+#define CMD_HELP(h) , h
 #endif
 
 const cmd_def_t cmd_table[CMD_COUNT] = {
 #define VS_CMD(name, op, it, in, ot, on, help)                                                     \
-	{#name,		op, (uint8_t)(sizeof(it) - 1), (uint8_t)(sizeof(ot) - 1), it, in, ot, on,  \
-	 CMD_HELP(help)},
+	{#name, op, (uint8_t)(sizeof(it) - 1), (uint8_t)(sizeof(ot) - 1), it,                      \
+	 in,	ot, on CMD_HELP(help)},
 #include "commands.def"
 #undef VS_CMD
 };
@@ -139,6 +139,7 @@ uint16_t cmd_crc16(uint16_t crc, const void *data, size_t n)
 	return (uint16_t)c;
 }
 
+#ifndef VS_TABLE_CRC_CONST
 static uint16_t table_crc_compute(void)
 {
 	uint16_t crc = 0xFFFF;
@@ -171,14 +172,19 @@ static uint16_t table_crc_compute(void)
  * console_init or canlink_init at start-up, never again from a request. */
 static uint16_t table_crc;
 static bool table_crc_known;
+#endif
 
 uint16_t cmd_table_crc(void)
 {
 	if (!by_name_known)
 		by_name_sort(); /* with the checksum, at start-up (console_init) */
+#ifdef VS_TABLE_CRC_CONST
+	return CMD_TABLE_CRC;
+#else
 	if (!table_crc_known) {
 		table_crc = table_crc_compute();
 		table_crc_known = true;
 	}
 	return table_crc;
+#endif
 }

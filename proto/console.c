@@ -453,8 +453,10 @@ static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_
 						   CONSOLE_E_EXTRA, argv[1]);
 			rb_printf(r, "ok %u ", d->opcode);
 			rb_signature(r, d);
+#ifndef VS_NO_HELP_TEXT
 			if (d->help[0])
 				rb_printf(r, ": %s", d->help);
+#endif
 			return true;
 		}
 		return reply_error(c, r, "%d $help takes 0 or 1 argument, got %u", CONSOLE_E_ARITY,

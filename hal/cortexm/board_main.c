@@ -38,6 +38,11 @@ static __attribute__((noinline)) uint32_t unit_init(void)
 	vs_hal_t hal = {&loop_hal_ops, &plant};
 	vs_config_defaults(&cfg);
 	cfg.has_joystick = false;
+#if VS_KIN_ONLY == 1 /* VS_KIN_OMNI: the preprocessor sees no enum */
+	/* The mecanum build (make MCU_KIN=omni): 400 mm between the axles. */
+	cfg.kinematics = VS_KIN_OMNI;
+	cfg.wheel_base_mm = VS_REAL(400.0);
+#endif
 	/* The loopback's drives follow their setpoints at once. */
 	for (unsigned i = 0; i < VS_MAX_AXES; i++)
 		cfg.drive_lag_ms[i] = 0;

@@ -75,6 +75,16 @@ long bench_scenario(rig_t *r, const char *sc, const bench_hooks_t *h)
 			}
 			tick(r, h, "tick");
 		}
+	} else if (strcmp(sc, "goal_jerk") == 0) {
+		/* A continuous goal off the heading, from rest: the turn's and
+		 * the translation's tails, each planned on some tick. */
+		need(vehicle_set_jerk(&r->v, VS_REAL(2000.0), VS_REAL(1000.0)), "$jerk");
+		need(vs_moveContinuousRel(
+			 &r->v, (vs_position_t){VS_REAL(300.0), VS_REAL(200.0), VS_REAL(0.0)}),
+		     "moveContinuousRel");
+		do
+			tick(r, h, "tick");
+		while (motion_has_work(&r->v.motion));
 	} else if (strcmp(sc, "retarget") == 0 || strcmp(sc, "retarget_jerk") == 0) {
 		/* Under jerk limits every tick counts: a tail to rest may be
 		 * planned on any of them. */

@@ -31,7 +31,9 @@ typedef struct {
 	bool (*plan)(rig_t *r, const char *label);
 } bench_hooks_t;
 
-#define BENCH_SCENARIOS "idle line cruise jog retarget line_jerk jog_jerk cruise_jerk speed_jerk"
+#define BENCH_SCENARIOS                                                                            \
+	"idle line cruise jog retarget line_jerk jog_jerk cruise_jerk speed_jerk retarget_jerk "   \
+	"goal_jerk"
 
 /* Runs one scenario on a rig fresh from rig_init. Returns the measured
  * ticks, or -1 for an unknown name; exits when an operation is refused. */
