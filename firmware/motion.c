@@ -62,7 +62,7 @@ void motion_set_jerk(motion_t *m, q32_t jt, q32_t jr)
 	limits_changed(m);
 	/* A continuous goal under way takes up the jerk-limited law from its
 	 * speed and acceleration (motion_seek.c). */
-	if (ONLINE_SEEK && m->mode == MODE_CONTINUOUS)
+	if (ONLINE_JERK && m->mode == MODE_CONTINUOUS)
 		motion_seek_retarget(m);
 }
 
@@ -180,7 +180,7 @@ void motion_halt(motion_t *m)
 	m->vel = (fx_twist_t){0};
 	m->vacc = (fx_twist_t){0};
 	m->vtarget = (fx_twist_t){0};
-	if (ONLINE_SEEK) { /* the continuous goal's law (motion_seek.c) */
+	if (ONLINE_JERK) { /* the continuous goal's law (motion_seek.c) */
 		m->sk_on[0] = m->sk_on[1] = false;
 		m->sk_v[0] = m->sk_v[1] = m->sk_a[0] = m->sk_a[1] = 0;
 	}

@@ -25,21 +25,15 @@
 
 /* The jerk-limited profiles that start or end at speed (cruise lines
  * between their corner speeds, the glide to a new speed limit, planning
- * ahead): a build may leave them out (-DMOTION_NO_ONLINE_JERK); it then
- * runs cruise lines on the acceleration-limited profile and brakes to rest
- * for a lower limit. The continuous goal's law under jerk limits
- * (motion_seek.c) goes with them, or alone (-DMOTION_NO_ONLINE_SEEK, the
- * Cortex-M images for now: docs/jerk.md); the goal then runs its
+ * ahead, the continuous goal's law in motion_seek.c): a build may leave them
+ * out (-DMOTION_NO_ONLINE_JERK, the Cortex-M images for now: docs/jerk.md);
+ * it then runs cruise lines on the acceleration-limited profile, brakes to
+ * rest for a lower limit and runs the continuous goal's
  * acceleration-limited law. */
 #ifdef MOTION_NO_ONLINE_JERK
 #define ONLINE_JERK 0
 #else
 #define ONLINE_JERK 1
-#endif
-#if defined(MOTION_NO_ONLINE_JERK) || defined(MOTION_NO_ONLINE_SEEK)
-#define ONLINE_SEEK 0
-#else
-#define ONLINE_SEEK 1
 #endif
 
 #define TINY_MM	 ((q32_t)4295) /* 1e-6 mm: below this a line has no length */

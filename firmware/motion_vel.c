@@ -40,7 +40,7 @@ bool motion_continuous_rel(motion_t *m, const fx_pose_t *rel)
 	if (m->mode != MODE_CONTINUOUS)
 		m->goal_reverse = false;
 	m->mode = MODE_CONTINUOUS;
-	if (ONLINE_SEEK && seek_jerk(m))
+	if (ONLINE_JERK && seek_jerk(m))
 		motion_seek_retarget(m);
 	return true;
 }
@@ -255,7 +255,7 @@ void motion_continuous_tick(motion_t *m, fx_twist_t *out)
 {
 	if (rest_first(m, out))
 		return;
-	if (ONLINE_SEEK && seek_jerk(m)) {
+	if (ONLINE_JERK && seek_jerk(m)) {
 		motion_seek_tick(m, out);
 		return;
 	}

@@ -65,9 +65,9 @@ NO_LOOP_CALLS void *memcpy(void *restrict dst, const void *restrict src, size_t 
 NO_LOOP_CALLS void *memchr(const void *p, int c, size_t n)
 {
 	const unsigned char *s = p;
-	for (; n; n--, s++)
-		if (*s == (unsigned char)c)
-			return (void *)(uintptr_t)s;
+	for (size_t i = 0; i < n; i++)
+		if (s[i] == (unsigned char)c)
+			return (void *)(s + i); /* memchr's contract drops const */
 	return NULL;
 }
 
