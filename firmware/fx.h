@@ -47,9 +47,18 @@ uint64_t fx_isqrt64(uint64_t v);
 /* n / d for 0 < d < 2^16 (fx.c: cheap where 64-bit division is a call). */
 uint64_t fx_udiv64_small(uint64_t n, uint32_t d);
 
+/* A small helper: inline for speed, but out of line where code size counts
+ * (-Os, a board): on a 32-bit core each inlined copy of its 64-bit
+ * arithmetic costs more flash than a call (1.7 KiB in all, docs/mcu.md). */
+#ifdef __OPTIMIZE_SIZE__
+#define FX_HELPER static __attribute__((noinline, unused))
+#else
+#define FX_HELPER static inline
+#endif
+
 /* n / d for n >= 0, d > 0. On a 32-bit core a 64-bit division is a library
  * call of some 100 instructions; when both fit 32 bits, the core divides. */
-static inline int64_t fx_div_nn(int64_t n, int64_t d)
+FX_HELPER int64_t fx_div_nn(int64_t n, int64_t d)
 {
 #if SIZE_MAX <= UINT32_MAX
 	if (((uint64_t)n | (uint64_t)d) >> 32 == 0)
@@ -70,15 +79,6 @@ q32_t fx_atan2_deg(int64_t y, int64_t x);
 
 /* Euclidean length of (x, y), both Q32; result Q32. */
 q32_t fx_hypot(q32_t x, q32_t y);
-
-/* A small helper: inline for speed, but out of line where code size counts
- * (-Os, a board): on a 32-bit core each inlined copy of its 64-bit
- * arithmetic costs more flash than a call (1.7 KiB in all, docs/mcu.md). */
-#ifdef __OPTIMIZE_SIZE__
-#define FX_HELPER static __attribute__((noinline, unused))
-#else
-#define FX_HELPER static inline
-#endif
 
 FX_HELPER int64_t fx_abs64(int64_t v)
 {

@@ -176,10 +176,12 @@ typedef struct {
 	q32_t sk_v[2], sk_a[2], sk_cap[2];
 	int64_t sk_dip[2]; /* the dips' bound in ticks: translation, rotation */
 	int32_t sk_c, sk_s;
+	/* The profile flags a drop clears together (plan_drop): one word. */
+	bool sc_on; /* the planned jerk-limited profile runs */
+	bool ln_on, glide, hold_on;
 	int8_t sk_sg[2];
 	bool sk_on[2], sk_rest[2]; /* sk_rest: the tail is an S-curve from rest */
-	bool sc_on;		   /* the planned jerk-limited profile runs */
-	bool ln_on, glide, fresh, hold_on, face_ok;
+	bool fresh, face_ok;
 	uint8_t ln_i, ln_next; /* ln_next: LN_NEXT_* */
 
 	/* The large members last: a Cortex-M loads a 64-bit member in one

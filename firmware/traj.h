@@ -149,6 +149,13 @@
  * S-curve of section 4 (within the limits on its own, as the hold has
  * none of the ramps' acceleration; a tick at w either side), and the line
  * lands with no remainder.
+ *
+ * The line speed is the fastest w that fits with K = 0, to 1/256 of it,
+ * by bisection; each trial plans both ramps' boxes, the shortest of four
+ * candidates Nj around min(A / J, sqrt(Delta / J)) with Na = max(Nj,
+ * ceil(Delta / A), ceil(Delta / (J Nj))), and ceil(Delta / (J Nj)) =
+ * ceil(ceil(Delta / J) / Nj): one wide division per ramp, the rest in a
+ * 32-bit core's word.
  */
 #ifndef TRAJ_H
 #define TRAJ_H

@@ -161,21 +161,39 @@ q32_t traj_jslew(q32_t *v, q32_t *acc, q32_t target, q32_t amax, q32_t j)
 }
 
 /* A ramp's box lengths (Na >= Nj, traj.h section 6): the shortest that
- * change the speed by delta (> 0) within am and jm. */
-static void ramp_shape(int64_t delta, int64_t am, int64_t jm, int64_t *na, int64_t *nj)
+ * change the speed by delta (> 0) within am and jm; amj = am / jm.
+ * ceil(delta / (jm t)) is ceil(ceil(delta / jm) / t) for positive integers:
+ * one wide division, then narrow ones (the core's own on a 32-bit core). */
+static void ramp_shape(int64_t delta, int64_t am, int64_t jm, int64_t amj, int64_t *na,
+		       int64_t *nj)
 {
-	int64_t t0 =
-	    fx_min64(fx_div_nn(am, jm), (int64_t)fx_isqrt64((uint64_t)fx_div_nn(delta, jm)));
-	int64_t best = INT64_MAX, na0 = ceil_div(delta, am);
-	for (int64_t t = fx_max64(t0 - 1, 1); t <= t0 + 2; t++) {
-		int64_t n = fx_max64(t, na0);
-		n = fx_max64(n, ceil_div(delta, traj_mul_sat(jm, t)));
-		if (n + t < best) {
-			best = n + t;
-			*na = n;
-			*nj = t;
+	int64_t qj = fx_div_nn(delta, jm), cj = qj + (qj * jm != delta);
+	/* min(amj, isqrt(qj)): no root where the acceleration limit binds. */
+	int64_t t0 = amj >> 31 == 0 && amj * amj <= qj
+			 ? amj
+			 : fx_min64(amj, (int64_t)fx_isqrt64((uint64_t)qj));
+	int64_t na0 = ceil_div(delta, am);
+	if (((uint64_t)na0 | (uint64_t)cj | (uint64_t)(t0 + 2)) >> 30 == 0) {
+		/* All below 2^30, as they are but for extreme limits: the
+		 * candidates in the core's word, its own divisions. */
+		uint32_t a0 = (uint32_t)na0, c = (uint32_t)cj, best = UINT32_MAX;
+		for (uint32_t t = t0 > 1 ? (uint32_t)t0 - 1 : 1; t <= (uint32_t)t0 + 2; t++) {
+			uint32_t n = (c - 1) / t + 1;
+			n = n > a0 ? n : a0;
+			n = n > t ? n : t;
+			if (n + t < best) {
+				best = n + t;
+				*na = n;
+				*nj = t;
+			}
 		}
+		return;
 	}
+	/* Beyond (ramps of 2^30 ticks and more, under a jerk limit a million
+	 * times below the acceleration's): t0 alone, which serves delta within
+	 * a tick or two of the shortest. */
+	*nj = fx_max64(t0, 1);
+	*na = fx_max64(fx_max64(*nj, na0), ceil_div(cj, *nj));
 }
 
 /* True when boxes na, nj carry a ramp of delta within am and jm. */
@@ -199,7 +217,7 @@ FX_HELPER void ramp_start(traj_sc_t *s, int64_t delta, int64_t na, int64_t nj)
 static int64_t ln_dist(const traj_ln_t *p, int64_t w, int64_t k)
 {
 	int64_t d1 = w - p->cin, l1 = p->na1 + p->nj1 - 1, l2 = p->na2 + p->nj2 - 1;
-	int64_t r1 = traj_mul_sat(fx_abs64(d1), p->na1 + p->nj1) / 2;
+	int64_t r1 = traj_mul_sat(d1 < 0 ? -d1 : d1, p->na1 + p->nj1) / 2;
 	int64_t r2 = traj_mul_sat(w - p->cout, p->na2 + p->nj2) / 2;
 	return p->cin * l1 + (d1 < 0 ? -r1 : r1) + traj_mul_sat(w, k + l2) - r2;
 }
@@ -207,11 +225,12 @@ static int64_t ln_dist(const traj_ln_t *p, int64_t w, int64_t k)
 /* The ramps' boxes for line speed w (one at least, so that L >= 1). */
 static void ln_shapes(traj_ln_t *p, int64_t w1, int64_t w2, int64_t am, int64_t jm)
 {
+	int64_t amj = fx_div_nn(am, jm);
 	p->na1 = p->nj1 = p->na2 = p->nj2 = 1;
 	if (w1 != p->cin)
-		ramp_shape(fx_abs64(w1 - p->cin), am, jm, &p->na1, &p->nj1);
+		ramp_shape(w1 > p->cin ? w1 - p->cin : p->cin - w1, am, jm, amj, &p->na1, &p->nj1);
 	if (w2 != p->cout)
-		ramp_shape(w2 - p->cout, am, jm, &p->na2, &p->nj2);
+		ramp_shape(w2 - p->cout, am, jm, amj, &p->na2, &p->nj2);
 }
 
 static bool ln_fits(traj_ln_t *p, int64_t w, int64_t len, int64_t am, int64_t jm)
@@ -233,7 +252,7 @@ static bool ln_top(traj_ln_t *p, int64_t len, int64_t vm, int64_t am, int64_t jm
 		 * faster. The first ramp's boxes serve down to 1/64 below it,
 		 * which leaves the search below room. */
 		lo = vm;
-		wmin = vm - vm / 64;
+		wmin = vm - (vm >> 6);
 		ln_shapes(p, wmin, lo, am, jm);
 		if (ln_dist(p, lo, 0) > len)
 			return false;

@@ -50,13 +50,11 @@ MCU := $(BUILD)/$(TARGET)$(if $(filter omni,$(MCU_KIN)),-omni)
 # A 16-deep motion queue (2 kB of RAM less than the host's 32). The
 # boundary's numbers in Q32, not double (firmware/real.h): no floating point
 # in the image; -Wfloat-conversion catches a double constant handed to it
-# without VS_REAL(). The jerk-limited profiles that start or end at speed
-# are left out for now: with them the image fits the flash (47.4 KiB, 47.7
-# for the mecanum base), but they plan in the tick, and at the MPS2 board's
-# 25 MHz a cruise's first line planned there takes 16,000 instructions, over
-# a period (docs/jerk.md); the board runs their acceleration-limited forms.
+# without VS_REAL(). The M0 leaves out the jerk-limited profiles that start
+# or end at speed (its Thumb-1 code for them does not fit the flash): it runs
+# their acceleration-limited forms (docs/jerk.md).
 MCU_DEFS := -DMOTION_QUEUE_LEN=16 -DVS_REAL_Q32 -Wfloat-conversion -DVS_KIN_ONLY=$(MCU_KIN_ONLY) \
-	-DMOTION_NO_ONLINE_JERK
+	$(if $(filter cortex-m0,$(TARGET)),-DMOTION_NO_ONLINE_JERK)
 # Link-time optimisation: inlining and dead-code removal across files saves
 # a tenth of the flash (49.4 KiB -> 44.5 KiB when it was brought in). Fat
 # objects keep their machine code too, which check_nofloat.sh reads.

@@ -14,6 +14,11 @@
  *   speed_jerk  moveForward 3000 with $jerk 2000 1000; setVelocity 800 at tick
  *             1500 (on the hold), 300 at 2600: every tick, the three after
  *             each new speed apart
+ *   retarget_jerk  retarget with $jerk 2000 1000: every tick, and the call
+ *   goal_jerk  moveContinuousRel 300 200 0 from rest with $jerk 2000 1000
+ *   blend_jerk  moveCruiseAbs 300,0, 300,300, 600,300, 10 ticks apart, with
+ *             $jerk 2000 1000: the running line glides into each new corner
+ *             and plans its line in the tick
  */
 #ifndef BENCH_SCENARIO_H
 #define BENCH_SCENARIO_H
@@ -33,7 +38,7 @@ typedef struct {
 
 #define BENCH_SCENARIOS                                                                            \
 	"idle line cruise jog retarget line_jerk jog_jerk cruise_jerk speed_jerk retarget_jerk "   \
-	"goal_jerk"
+	"goal_jerk blend_jerk"
 
 /* Runs one scenario on a rig fresh from rig_init. Returns the measured
  * ticks, or -1 for an unknown name; exits when an operation is refused. */
