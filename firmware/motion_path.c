@@ -727,12 +727,11 @@ static q32_t sc_speed(motion_t *m, bool braking)
 	return u;
 }
 
-/* The profile of a cruise line that has yet to begin, planned ahead
- * (motion_plan_idle) for the length, speeds and limits in ln_key; true
- * when it planned. */
-static bool plan_ahead(motion_t *m, q32_t len, q32_t cin, q32_t cout)
+/* A cruise line's profile planned ahead (motion_plan_idle) for the length,
+ * speeds and limits in ln_key; true when it planned. */
+static bool plan_ahead_at(motion_t *m, q32_t len, q32_t cin, q32_t cout, q32_t v, q32_t a,
+			  q32_t j)
 {
-	q32_t v = vt_eff(m), a = m->a_t_pt2, j = m->j_t_pt3;
 	const q32_t key[6] = {len, cin, cout, v, a, j};
 	/* A key tried, planned or not, is not tried again. */
 	bool same = m->ln_next != LN_NEXT_NONE;
@@ -747,19 +746,49 @@ static bool plan_ahead(motion_t *m, q32_t len, q32_t cin, q32_t cout)
 	return true;
 }
 
+/* The profile of a cruise line that has yet to begin, at the line's
+ * limits. */
+static bool plan_ahead(motion_t *m, q32_t len, q32_t cin, q32_t cout)
+{
+	return plan_ahead_at(m, len, cin, cout, vt_eff(m), m->a_t_pt2, m->j_t_pt3);
+}
+
+/* A line that glides (a waypoint queued, a new speed limit): the line from
+ * the speed its glide ends at, for the tick after its acceleration reaches
+ * zero (glide_step), planned ahead. From the change a0 = |acc| the glide
+ * takes n = ceil(a0 / J) ticks, the k-th changing the speed by a_k =
+ * a0 - k J (0 from the n-th); its speeds are v + sg A_k, A_k = k a0 -
+ * J k (k + 1) / 2 for k < n and A_n = A_(n-1), and the sum of A_1 ..
+ * A_(n-1) is a0 m (m + 1) / 2 - J m (m + 1) (m + 2) / 6 with m = n - 1. */
+static bool plan_glide(motion_t *m)
+{
+	q32_t a0 = fx_abs64(m->acc), j = m->lim_j, sg = m->acc < 0 ? -1 : 1;
+	int64_t n = (a0 + j - 1) / j, mm = n > 0 ? n - 1 : 0;
+	if (n > 4096 || a0 > ((int64_t)1 << 40))
+		return false; /* beyond reason: planned in the tick, as before */
+	int64_t an = mm * a0 - j * (mm * (mm + 1) / 2);
+	int64_t sum = n ? a0 * (mm * (mm + 1) / 2) - j * (mm * (mm + 1) * (mm + 2) / 6) + an : 0;
+	q32_t v = m->v + sg * an, moved = n * m->v + sg * sum;
+	return plan_ahead_at(m, m->seg.len - m->seg.s - moved, v, piece_cout(m), m->lim_vmax,
+			     m->lim_a, m->lim_j);
+}
+
 /* The next cruise line's profile, planned ahead under jerk limits. The
  * head's line, before it begins, starts from rest where the unit stands
  * (a turn to face it moves no position) toward its corner's speed (one
  * that ends at rest runs the S-curve, planned in its first tick). Or the
  * line after the head's, while the head's line or corner runs: it begins
  * at the corner's exit after the corner's last step carried it o = n c -
- * 2 Lh in (the corner is entered on a tick at speed c and holds it), or
+ * R in, R what is left of the corner from the tick (2 Lh before it: a
+ * line lands on its end on a tick) and the corner holding speed c, or
  * where a collinear pass's line ends, at that line's last speed. */
 bool motion_plan_next_line(motion_t *m)
 {
 	if (!ONLINE_JERK || m->mode != MODE_PATH || m->q_count == 0 || m->stopping || m->paused ||
 	    !m->jerk_any)
 		return false;
+	if (m->glide && m->seg.kind == SEG_LINE && m->lim_ok && m->lim_j > 0)
+		return plan_glide(m);
 	const motion_cmd_t *c0 = q_at(m, 0);
 	if (c0->kind != MCMD_CRUISE || !c0->start_known)
 		return false;
@@ -796,7 +825,10 @@ bool motion_plan_next_line(motion_t *m)
 	cruise_line_end(c1, &e);
 	q32_t x = lh2 ? c0->exit_x_mm : c0->target.x_mm;
 	q32_t y = lh2 ? c0->exit_y_mm : c0->target.y_mm;
-	q32_t o = lh2 ? ((lh2 + c - 1) / c) * c - lh2 : 0;
+	/* In the corner already, what is left of it from this tick on: it
+	 * may have been entered mid-tick (straight from the corner before). */
+	q32_t left = m->seg.kind == SEG_CORNER ? lh2 - m->seg.s : lh2;
+	q32_t o = lh2 ? ((left + c - 1) / c) * c - left : 0;
 	q32_t cout = c1->has_corner ? fx_min64(c1->vend_pt, v - 1) : 0;
 	return plan_ahead(m, line_len_from(c1, &e, x, y) - o, c, cout);
 }

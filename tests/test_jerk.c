@@ -982,6 +982,69 @@ static void test_cruise_s_curve(void **state)
 	printf("cruise under jerk limits: %d ticks (acceleration-limited: %d)\n", n1, n0);
 }
 
+/* Waypoints queued while the unit runs (300 or 600 mm legs, 10 ticks
+ * apart): the running line on its S-curve becomes a blend and glides into
+ * each new corner. With the main loop's planning between ticks every line
+ * runs on a plan made ahead: the line from the speed a glide ends at
+ * (planned for the state the glide reaches), and the line after two
+ * corners with no line between them (its start carried into the second
+ * corner mid-tick). The ticks are those planned in the tick, and the route
+ * lands on its last waypoint. */
+static void run_blend(jrig_t *r, int leg, bool ahead, q32_t *trace, int *n, int *starts,
+		      int *flips)
+{
+	const q32_t l = (q32_t)leg << 32;
+	const q32_t wp[3][2] = {{l, 0}, {l, l}, {2 * l, l}};
+	jrig_init(r, MOTION_KIN_DIFF);
+	*n = *starts = *flips = 0;
+	for (int k = 0; k < 3 || (motion_has_work(&r->m) && *n < 20000); k++) {
+		if (k < 3)
+			assert_true(motion_cruise_abs(&r->m, wp[k][0], wp[k][1]));
+		for (int i = 0; i < (k < 3 ? 10 : 1); i++) {
+			if (ahead)
+				while (motion_plan_idle(&r->m))
+					;
+			bool was_on = r->m.ln_on;
+			uint8_t was_i = r->m.ln_i;
+			int64_t was_k = r->m.lnb[r->m.ln_i].k;
+			jrig_tick(r);
+			trace[(*n)++] = r->u1[0];
+			/* A line plan begins: its sampler is at its first step. */
+			if (r->m.ln_on && (!was_on || r->m.ln_i != was_i || r->m.lnb[r->m.ln_i].k <
+										  was_k))
+				++*starts;
+			*flips += r->m.ln_i != was_i;
+		}
+	}
+	jrig_tick(r);
+	assert_int_equal(r->m.ref.x_mm, 2 * l);
+	assert_int_equal(r->m.ref.y_mm, l);
+	assert_true(r->amax[0] <= r->m.a_t_pt2);
+	assert_true(r->jmax[0] <= r->m.j_t_pt3);
+}
+
+static void test_blend_planned_ahead(void **state)
+{
+	(void)state;
+	static q32_t t1[20000], t2[20000];
+	static jrig_t r;
+	static const int legs[2] = {300, 600};
+	for (int g = 0; g < 2; g++) {
+		int n1, n2, s1, s2, f1, f2;
+		run_blend(&r, legs[g], false, t1, &n1, &s1, &f1);
+		run_blend(&r, legs[g], true, t2, &n2, &s2, &f2);
+		assert_int_equal(n1, n2);
+		for (int i = 0; i < n1; i++)
+			assert_int_equal(t1[i], t2[i]);
+		/* In the tick: each plan in its own buffer, no switch. Ahead:
+		 * every line switches to the plan made for it. */
+		assert_int_equal(f1, 0);
+		assert_true(s2 >= 2);
+		assert_int_equal(f2, s2);
+		assert_int_equal(s1, s2);
+	}
+}
+
 /* A stop in the middle of a held corner of that route brakes from the
  * corner's speed at the limits, from zero acceleration (the hold's, not
  * the line's last): its first change of acceleration is the corner's
@@ -1059,6 +1122,7 @@ int main(void)
 	    cmocka_unit_test(test_new_speed_while_accelerating),
 	    cmocka_unit_test(test_new_speed_glides),
 	    cmocka_unit_test(test_cruise_s_curve),
+	    cmocka_unit_test(test_blend_planned_ahead),
 	    cmocka_unit_test(test_stop_in_held_corner),
 	    cmocka_unit_test(test_jog_retarget_while_accelerating),
 	    cmocka_unit_test(test_continuous_s_curve),

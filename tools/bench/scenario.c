@@ -78,21 +78,23 @@ long bench_scenario(rig_t *r, const char *sc, const bench_hooks_t *h)
 	} else if (strcmp(sc, "blend_jerk") == 0) {
 		/* Waypoints queued while the unit runs: the line running on its
 		 * plan to rest becomes a blend and glides into the new corner;
-		 * the line from the glide's speed is planned in the tick where
-		 * the acceleration reaches zero, not ahead (the dearest tick of
-		 * a cruise under jerk limits). */
+		 * the line from the speed the glide ends at is planned between
+		 * ticks, as the main loop does ("plan-ahead"). */
 		need(vehicle_set_jerk(&r->v, VS_REAL(2000.0), VS_REAL(1000.0)), "$jerk");
 		static const int32_t wp[3][2] = {{300, 0}, {300, 300}, {600, 300}};
 		for (int k = 0; k < 3; k++) {
 			need(vs_moveCruiseAbs(&r->v, (vs_point_t){vs_real_int(wp[k][0]),
 								  vs_real_int(wp[k][1])}),
 			     "moveCruiseAbs");
-			for (int i = 0; i < 10; i++)
+			for (int i = 0; i < 10; i++) {
+				h->plan(r, "plan-ahead");
 				tick(r, h, "tick");
+			}
 		}
-		do
+		do {
+			h->plan(r, "plan-ahead");
 			tick(r, h, "tick");
-		while (motion_has_work(&r->v.motion));
+		} while (motion_has_work(&r->v.motion));
 	} else if (strcmp(sc, "goal_jerk") == 0) {
 		/* A continuous goal off the heading, from rest: the turn's and
 		 * the translation's tails, each planned on some tick. */

@@ -17,8 +17,8 @@
  *   retarget_jerk  retarget with $jerk 2000 1000: every tick, and the call
  *   goal_jerk  moveContinuousRel 300 200 0 from rest with $jerk 2000 1000
  *   blend_jerk  moveCruiseAbs 300,0, 300,300, 600,300, 10 ticks apart, with
- *             $jerk 2000 1000: the running line glides into each new corner
- *             and plans its line in the tick
+ *             $jerk 2000 1000: the running line glides into each new corner;
+ *             the main loop's planning between two ticks measured apart
  */
 #ifndef BENCH_SCENARIO_H
 #define BENCH_SCENARIO_H
