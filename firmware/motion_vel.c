@@ -187,6 +187,9 @@ void motion_velocity_tick(motion_t *m, fx_twist_t *out)
 	}
 }
 
+/* pi / 180 in Q32. */
+#define VS_RAD_PER_DEG_Q32 ((q32_t)74961321)
+
 /* Toward the goal on a differential base, heading error e, forward or
  * backing (motion_goal_facing). */
 static void goal_want_diff(motion_t *m, q32_t e, q32_t dist, fx_twist_t *want)
@@ -198,8 +201,18 @@ static void goal_want_diff(motion_t *m, q32_t e, q32_t dist, fx_twist_t *want)
 	want->w_pt = e < 0 ? -wr : wr;
 	uint32_t b = fx_deg_to_bam(e);
 	q32_t proj = fx_mul_q30(dist, fx_cos_bam(b));
-	if (proj > 0 && ae < fx_from_int(45))
+	if (proj > 0 && ae < fx_from_int(45)) {
 		want->vx_pt = fx_min64(traj_umax(proj, m->a_t_pt2), vt_eff(m));
+		/* No faster than the turn can bring the goal round: the circle
+		 * through it tangent to the heading has radius d / (2 sin e),
+		 * and at v / w above it the unit orbits the goal. */
+		int32_t s = fx_sin_bam(b);
+		if (s != 0) {
+			q32_t w_rad = fx_mul(wr, VS_RAD_PER_DEG_Q32);
+			q32_t cap = fx_div(fx_mul(dist, w_rad), 8 * (q32_t)(s < 0 ? -s : s));
+			want->vx_pt = fx_min64(want->vx_pt, cap);
+		}
+	}
 	if (m->goal_reverse)
 		want->vx_pt = -want->vx_pt;
 	if (dist < m->v_t_pt && ae < fx_from_int(1))

@@ -194,6 +194,44 @@ static void test_continuous_retarget(void **state)
 	assert_true(r.aw_max <= 180.0 * 1.0000001);
 }
 
+/* A retarget to a point close by, off the heading (300, 200 then, 400 ms
+ * later, 100, -100 from where the unit is): the forward speed never exceeds
+ * what the turn can bring the goal round at (v <= w d / (2 sin e)), so the
+ * unit does not orbit the goal: it lands on it exactly within 5.5 s
+ * (5,055 ticks), turning less than one full turn in all (224 degrees;
+ * before, it circled the goal for 19,284 ticks, 1,618 degrees). */
+static void test_continuous_no_orbit(void **state)
+{
+	(void)state;
+	rig_t r;
+	rig_init(&r, MOTION_KIN_DIFF);
+	fx_pose_t g1 = {q(300), q(200), 0};
+	assert_true(motion_continuous_rel(&r.m, &g1));
+	for (int i = 0; i < 400; i++)
+		rig_tick(&r);
+	fx_pose_t g2 = {q(100), q(-100), 0};
+	assert_true(motion_continuous_rel(&r.m, &g2));
+	fx_pose_t goal = r.m.goal;
+	double turned = 0, th = d(r.m.ref.th_deg);
+	uint32_t t0 = r.ticks;
+	for (int i = 0; i < 30000 && motion_has_work(&r.m); i++) {
+		rig_tick(&r);
+		double dth = d(r.m.ref.th_deg) - th;
+		dth -= 360.0 * floor((dth + 180.0) / 360.0);
+		turned += fabs(dth);
+		th = d(r.m.ref.th_deg);
+	}
+	printf("retarget close by: %u ticks, turned %.1f deg\n", r.ticks - t0, turned);
+	assert_false(motion_has_work(&r.m));
+	assert_int_equal(r.m.ref.x_mm, goal.x_mm);
+	assert_int_equal(r.m.ref.y_mm, goal.y_mm);
+	assert_int_equal(r.m.ref.th_deg, goal.th_deg);
+	assert_true(r.ticks - t0 < 5500);
+	assert_true(turned < 360.0);
+	assert_true(r.ax_max <= 500.0 * 1.0000001);
+	assert_true(r.aw_max <= 180.0 * 1.0000001);
+}
+
 static void test_pause_resume_stop(void **state)
 {
 	(void)state;
@@ -728,6 +766,7 @@ int main(void)
 	    cmocka_unit_test(test_set_pose_during_cruise),
 	    cmocka_unit_test(test_jog_watchdog),
 	    cmocka_unit_test(test_continuous_retarget),
+	    cmocka_unit_test(test_continuous_no_orbit),
 	    cmocka_unit_test(test_pause_resume_stop),
 	    cmocka_unit_test(test_omni_linear),
 	    cmocka_unit_test(test_arc_quarter),
