@@ -51,13 +51,13 @@ MCU := $(BUILD)/$(TARGET)$(if $(filter omni,$(MCU_KIN)),-omni)
 # boundary's numbers in Q32, not double (firmware/real.h): no floating point
 # in the image; -Wfloat-conversion catches a double constant handed to it
 # without VS_REAL(). The jerk-limited profiles that start or end at speed
-# are left out for now. On the M4 they fit the flash (47.5 KiB, 47.8 for the
-# mecanum base), but they plan in the tick and ahead of it in one call: at
-# the MPS2 board's 25 MHz a line planned in the tick after a glide makes a
-# tick of 10,000 instructions (two thirds of a period, the rule is half) and
-# a line planned ahead an idle call of 9,200 (the rule is a quarter), see
-# docs/jerk.md. On the M0 they would not fit (53 KiB). The board runs their
-# acceleration-limited forms.
+# are left out for now. On the M4 they need 164 bytes of flash more than the
+# budget (348 for the mecanum base), and they plan a line ahead of the tick
+# in one idle call, 9,200 instructions at the MPS2 board's 25 MHz (the rule
+# is a quarter of a period), and the continuous goal's tail in the tick
+# (7,828, a hair over the half a tick may take), see docs/jerk.md. On the M0
+# they would not fit (53 KiB). The board runs their acceleration-limited
+# forms.
 MCU_DEFS := -DMOTION_QUEUE_LEN=16 -DVS_REAL_Q32 -Wfloat-conversion -DVS_KIN_ONLY=$(MCU_KIN_ONLY) \
 	-DMOTION_NO_ONLINE_JERK
 # Link-time optimisation: inlining and dead-code removal across files saves
