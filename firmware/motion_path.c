@@ -729,8 +729,7 @@ static q32_t sc_speed(motion_t *m, bool braking)
 
 /* A cruise line's profile planned ahead (motion_plan_idle) for the length,
  * speeds and limits in ln_key; true when it planned. */
-static bool plan_ahead_at(motion_t *m, q32_t len, q32_t cin, q32_t cout, q32_t v, q32_t a,
-			  q32_t j)
+static bool plan_ahead_at(motion_t *m, q32_t len, q32_t cin, q32_t cout, q32_t v, q32_t a, q32_t j)
 {
 	const q32_t key[6] = {len, cin, cout, v, a, j};
 	/* A key tried, planned or not, is not tried again. */
@@ -764,8 +763,11 @@ static bool plan_glide(motion_t *m)
 {
 	q32_t a0 = fx_abs64(m->acc), j = m->lim_j, sg = m->acc < 0 ? -1 : 1;
 	int64_t n = (a0 + j - 1) / j, mm = n > 0 ? n - 1 : 0;
-	if (n > 4096 || a0 > ((int64_t)1 << 40))
-		return false; /* beyond reason: planned in the tick, as before */
+	/* Beyond reason (a change of 2^36 raw a tick, a glide of 4096 ticks):
+	 * planned in the tick, as before. Within, the sums stay below 2^60
+	 * (J m < a0). */
+	if (n > 4096 || a0 > ((int64_t)1 << 36))
+		return false;
 	int64_t an = mm * a0 - j * (mm * (mm + 1) / 2);
 	int64_t sum = n ? a0 * (mm * (mm + 1) / 2) - j * (mm * (mm + 1) * (mm + 2) / 6) + an : 0;
 	q32_t v = m->v + sg * an, moved = n * m->v + sg * sum;

@@ -164,8 +164,7 @@ q32_t traj_jslew(q32_t *v, q32_t *acc, q32_t target, q32_t amax, q32_t j)
  * change the speed by delta (> 0) within am and jm; amj = am / jm.
  * ceil(delta / (jm t)) is ceil(ceil(delta / jm) / t) for positive integers:
  * one wide division, then narrow ones (the core's own on a 32-bit core). */
-static void ramp_shape(int64_t delta, int64_t am, int64_t jm, int64_t amj, int64_t *na,
-		       int64_t *nj)
+static void ramp_shape(int64_t delta, int64_t am, int64_t jm, int64_t amj, int64_t *na, int64_t *nj)
 {
 	int64_t qj = fx_div_nn(delta, jm), cj = qj + (qj * jm != delta);
 	/* min(amj, isqrt(qj)): no root where the acceleration limit binds. */

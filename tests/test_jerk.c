@@ -990,8 +990,7 @@ static void test_cruise_s_curve(void **state)
  * corners with no line between them (its start carried into the second
  * corner mid-tick). The ticks are those planned in the tick, and the route
  * lands on its last waypoint. */
-static void run_blend(jrig_t *r, int leg, bool ahead, q32_t *trace, int *n, int *starts,
-		      int *flips)
+static void run_blend(jrig_t *r, int leg, bool ahead, q32_t *trace, int *n, int *starts, int *flips)
 {
 	const q32_t l = (q32_t)leg << 32;
 	const q32_t wp[3][2] = {{l, 0}, {l, l}, {2 * l, l}};
@@ -1010,8 +1009,8 @@ static void run_blend(jrig_t *r, int leg, bool ahead, q32_t *trace, int *n, int 
 			jrig_tick(r);
 			trace[(*n)++] = r->u1[0];
 			/* A line plan begins: its sampler is at its first step. */
-			if (r->m.ln_on && (!was_on || r->m.ln_i != was_i || r->m.lnb[r->m.ln_i].k <
-										  was_k))
+			if (r->m.ln_on &&
+			    (!was_on || r->m.ln_i != was_i || r->m.lnb[r->m.ln_i].k < was_k))
 				++*starts;
 			*flips += r->m.ln_i != was_i;
 		}

@@ -94,9 +94,8 @@ int main(void)
 {
 	static const bench_hooks_t hooks = {tick, retarget, plan};
 	static const char *const names[] = {
-	    "idle",	"line",	       "cruise",     "jog",	      "retarget", "line_jerk",
-	    "jog_jerk", "cruise_jerk", "speed_jerk", "retarget_jerk", "goal_jerk",
-	    "blend_jerk"};
+	    "idle",	"line",	       "cruise",     "jog",	      "retarget",  "line_jerk",
+	    "jog_jerk", "cruise_jerk", "speed_jerk", "retarget_jerk", "goal_jerk", "blend_jerk"};
 
 	uart_init();
 	systick_init(1000u);

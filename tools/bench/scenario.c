@@ -83,8 +83,8 @@ long bench_scenario(rig_t *r, const char *sc, const bench_hooks_t *h)
 		need(vehicle_set_jerk(&r->v, VS_REAL(2000.0), VS_REAL(1000.0)), "$jerk");
 		static const int32_t wp[3][2] = {{300, 0}, {300, 300}, {600, 300}};
 		for (int k = 0; k < 3; k++) {
-			need(vs_moveCruiseAbs(&r->v, (vs_point_t){vs_real_int(wp[k][0]),
-								  vs_real_int(wp[k][1])}),
+			need(vs_moveCruiseAbs(
+				 &r->v, (vs_point_t){vs_real_int(wp[k][0]), vs_real_int(wp[k][1])}),
 			     "moveCruiseAbs");
 			for (int i = 0; i < 10; i++) {
 				h->plan(r, "plan-ahead");
