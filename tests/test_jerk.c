@@ -990,31 +990,43 @@ static void test_cruise_s_curve(void **state)
  * corners with no line between them (its start carried into the second
  * corner mid-tick). The ticks are those planned in the tick, and the route
  * lands on its last waypoint. */
-static void run_blend(jrig_t *r, int leg, bool ahead, q32_t *trace, int *n, int *starts, int *flips)
+typedef struct {
+	bool ahead;
+	q32_t *trace;
+	int n, starts, flips;
+} blend_t;
+
+/* One tick of run_blend: the main loop's planning first (ahead), then
+ * whether a line plan began on it (its sampler at its first step) and
+ * whether that plan is the one made ahead (the buffers switched). */
+static void blend_tick(jrig_t *r, blend_t *b)
+{
+	if (b->ahead)
+		while (motion_plan_idle(&r->m))
+			;
+	bool was_on = r->m.ln_on;
+	uint8_t was_i = r->m.ln_i;
+	int64_t was_k = r->m.lnb[r->m.ln_i].k;
+	jrig_tick(r);
+	b->trace[b->n++] = r->u1[0];
+	if (r->m.ln_on && (!was_on || r->m.ln_i != was_i || r->m.lnb[r->m.ln_i].k < was_k))
+		b->starts++;
+	b->flips += r->m.ln_i != was_i;
+}
+
+static void run_blend(jrig_t *r, int leg, blend_t *b)
 {
 	const q32_t l = (q32_t)leg << 32;
 	const q32_t wp[3][2] = {{l, 0}, {l, l}, {2 * l, l}};
 	jrig_init(r, MOTION_KIN_DIFF);
-	*n = *starts = *flips = 0;
-	for (int k = 0; k < 3 || (motion_has_work(&r->m) && *n < 20000); k++) {
-		if (k < 3)
-			assert_true(motion_cruise_abs(&r->m, wp[k][0], wp[k][1]));
-		for (int i = 0; i < (k < 3 ? 10 : 1); i++) {
-			if (ahead)
-				while (motion_plan_idle(&r->m))
-					;
-			bool was_on = r->m.ln_on;
-			uint8_t was_i = r->m.ln_i;
-			int64_t was_k = r->m.lnb[r->m.ln_i].k;
-			jrig_tick(r);
-			trace[(*n)++] = r->u1[0];
-			/* A line plan begins: its sampler is at its first step. */
-			if (r->m.ln_on &&
-			    (!was_on || r->m.ln_i != was_i || r->m.lnb[r->m.ln_i].k < was_k))
-				++*starts;
-			*flips += r->m.ln_i != was_i;
-		}
+	b->n = b->starts = b->flips = 0;
+	for (int k = 0; k < 3; k++) {
+		assert_true(motion_cruise_abs(&r->m, wp[k][0], wp[k][1]));
+		for (int i = 0; i < 10; i++)
+			blend_tick(r, b);
 	}
+	while (motion_has_work(&r->m) && b->n < 20000)
+		blend_tick(r, b);
 	jrig_tick(r);
 	assert_int_equal(r->m.ref.x_mm, 2 * l);
 	assert_int_equal(r->m.ref.y_mm, l);
@@ -1029,18 +1041,18 @@ static void test_blend_planned_ahead(void **state)
 	static jrig_t r;
 	static const int legs[2] = {300, 600};
 	for (int g = 0; g < 2; g++) {
-		int n1, n2, s1, s2, f1, f2;
-		run_blend(&r, legs[g], false, t1, &n1, &s1, &f1);
-		run_blend(&r, legs[g], true, t2, &n2, &s2, &f2);
-		assert_int_equal(n1, n2);
-		for (int i = 0; i < n1; i++)
+		blend_t b1 = {.ahead = false, .trace = t1}, b2 = {.ahead = true, .trace = t2};
+		run_blend(&r, legs[g], &b1);
+		run_blend(&r, legs[g], &b2);
+		assert_int_equal(b1.n, b2.n);
+		for (int i = 0; i < b1.n; i++)
 			assert_int_equal(t1[i], t2[i]);
 		/* In the tick: each plan in its own buffer, no switch. Ahead:
 		 * every line switches to the plan made for it. */
-		assert_int_equal(f1, 0);
-		assert_true(s2 >= 2);
-		assert_int_equal(f2, s2);
-		assert_int_equal(s1, s2);
+		assert_int_equal(b1.flips, 0);
+		assert_true(b2.starts >= 2);
+		assert_int_equal(b2.flips, b2.starts);
+		assert_int_equal(b1.starts, b2.starts);
 	}
 }
 
