@@ -147,7 +147,10 @@ static bool seek_axis(motion_t *m, int i, q32_t *v, q32_t *acc, q32_t d, const s
 	} else {
 		q32_t u1 = u, a1 = au;
 		traj_jslew(&u1, &a1, l->vc, a, j);
-		if (dd - u1 >= stop_room(u1, fx_max64(a1, 0), l)) {
+		/* A slew that cannot turn a hard braking round before rest
+		 * leaves a negative speed: the acceleration to zero instead
+		 * (stop_room takes speeds from rest up). */
+		if (u1 >= 0 && dd - u1 >= stop_room(u1, fx_max64(a1, 0), l)) {
 			u = u1;
 			au = a1;
 		} else if (au != 0) {
