@@ -216,7 +216,7 @@ FX_HELPER void ramp_start(traj_sc_t *s, int64_t delta, int64_t na, int64_t nj)
 static int64_t ln_dist(const traj_ln_t *p, int64_t w, int64_t k)
 {
 	int64_t d1 = w - p->cin, l1 = p->na1 + p->nj1 - 1, l2 = p->na2 + p->nj2 - 1;
-	int64_t r1 = traj_mul_sat(d1 < 0 ? -d1 : d1, p->na1 + p->nj1) / 2;
+	int64_t r1 = traj_mul_sat(fx_abs64(d1), p->na1 + p->nj1) / 2;
 	int64_t r2 = traj_mul_sat(w - p->cout, p->na2 + p->nj2) / 2;
 	return p->cin * l1 + (d1 < 0 ? -r1 : r1) + traj_mul_sat(w, k + l2) - r2;
 }
@@ -227,7 +227,7 @@ static void ln_shapes(traj_ln_t *p, int64_t w1, int64_t w2, int64_t am, int64_t 
 	int64_t amj = fx_div_nn(am, jm);
 	p->na1 = p->nj1 = p->na2 = p->nj2 = 1;
 	if (w1 != p->cin)
-		ramp_shape(w1 > p->cin ? w1 - p->cin : p->cin - w1, am, jm, amj, &p->na1, &p->nj1);
+		ramp_shape(fx_abs64(w1 - p->cin), am, jm, amj, &p->na1, &p->nj1);
 	if (w2 != p->cout)
 		ramp_shape(w2 - p->cout, am, jm, amj, &p->na2, &p->nj2);
 }
