@@ -105,7 +105,12 @@ typedef struct {
 	traj_corner_t corner;
 } seg_t;
 
-enum { LN_NEXT_NONE, LN_NEXT_KEY /* tried, no plan */, LN_NEXT_PLAN };
+enum {
+	LN_NEXT_NONE,
+	LN_NEXT_KEY /* tried, no plan */,
+	LN_NEXT_PLAN,
+	LN_NEXT_PART /* planning, to go on at the next idle call */
+};
 
 typedef struct {
 	motion_params_t p;

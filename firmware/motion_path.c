@@ -732,16 +732,23 @@ static q32_t sc_speed(motion_t *m, bool braking)
 static bool plan_ahead_at(motion_t *m, q32_t len, q32_t cin, q32_t cout, q32_t v, q32_t a, q32_t j)
 {
 	const q32_t key[6] = {len, cin, cout, v, a, j};
-	/* A key tried, planned or not, is not tried again. */
+	traj_ln_t *ln = ln_ahead(m);
+	/* A key tried, planned or not, is not tried again; one being planned
+	 * goes on. */
 	bool same = m->ln_next != LN_NEXT_NONE;
 	for (int i = 0; i < 6 && same; i++)
 		same = key[i] == m->ln_key[i];
-	if (same || len <= 0 || j == 0)
+	if ((same && m->ln_next != LN_NEXT_PART) || len <= 0 || j == 0)
 		return false;
+	if (!same)
+		ln->n = 0;
 	for (int i = 0; i < 6; i++)
 		m->ln_key[i] = key[i];
-	m->ln_next =
-	    traj_ln_plan(ln_ahead(m), len, cin, cout, v, a, j) ? LN_NEXT_PLAN : LN_NEXT_KEY;
+	/* A budget bounds the trial lines a call takes (the board's main loop
+	 * runs the tick between calls). */
+	int r = traj_ln_plan_part(ln, len, cin, cout, v, a, j,
+				  m->plan_budget ? m->plan_budget : INT64_MAX);
+	m->ln_next = r > 0 ? LN_NEXT_PLAN : r < 0 ? LN_NEXT_PART : LN_NEXT_KEY;
 	return true;
 }
 

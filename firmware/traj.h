@@ -223,7 +223,7 @@ typedef struct {
 	int64_t dsign;		    /* above w (1) or below (-1) */
 	int64_t na1, nj1, na2, nj2; /* the ramps' box lengths (0: no ramp) */
 	int64_t cin, w, cout;	    /* speeds in, on the line, out */
-	int64_t l1, hold, n;	    /* ticks: first ramp, at w, in all */
+	int64_t l1, hold, n;	    /* ticks: first ramp, at w, in all (< 0: planning) */
 	int64_t r, racc, k;	    /* the spread remainder, its sum, ticks taken */
 } traj_ln_t;
 
@@ -232,6 +232,12 @@ typedef struct {
  * go from cin to cout with w >= cout, or the limits leave no room for the
  * margins. */
 bool traj_ln_plan(traj_ln_t *p, q32_t len, q32_t cin, q32_t cout, q32_t v, q32_t a, q32_t j);
+/* The same plan in parts: at most `fits` trial lines of the search (the
+ * rest counts as two), then it returns -1 with p->n < 0, and a call with
+ * the same inputs and p as left goes on; 1: planned, 0: as a false from
+ * traj_ln_plan. A call with p->n >= 0 begins afresh. */
+int traj_ln_plan_part(traj_ln_t *p, q32_t len, q32_t cin, q32_t cout, q32_t v, q32_t a, q32_t j,
+		      int64_t fits);
 /* The next step: the steps sum to len over p->n ticks, then cout each. */
 q32_t traj_ln_next(traj_ln_t *p);
 /* One tick of a jerk-limited change of the speed *v toward target (section

@@ -9,9 +9,11 @@
  * 64-bit arithmetic cost flash on a 32-bit core. */
 __attribute__((noinline)) int64_t traj_mul_sat(int64_t x, int64_t y)
 {
-	/* Both below 2^31: the product fits, no division (a library call of
-	 * some 100 instructions on a 32-bit core). */
-	if (((uint64_t)x | (uint64_t)y) >> 31 == 0)
+	/* Both below 2^31, or fewer than 64 significant bits between them:
+	 * the product is below 2^63, no division (a library call of some 100
+	 * instructions on a 32-bit core; speeds from 0.5 m/s are 2^31 raw). */
+	if (((uint64_t)x | (uint64_t)y) >> 31 == 0 || x == 0 ||
+	    __builtin_clzll((uint64_t)x) + __builtin_clzll((uint64_t)y) > 64)
 		return x * y;
 	return x > INT64_MAX / y ? INT64_MAX : x * y;
 }
@@ -238,59 +240,67 @@ static bool ln_fits(traj_ln_t *p, int64_t w, int64_t len, int64_t am, int64_t jm
 	return ln_dist(p, w, 0) <= len;
 }
 
-/* The line's top speed lo, the fastest that fits with no ticks at it,
- * and the lowest, wmin, that the search for the remainder may go down to;
- * the boxes in p planned for them. False when not even the ramp from cin
- * to cout fits. */
-static bool ln_top(traj_ln_t *p, int64_t len, int64_t vm, int64_t am, int64_t jm, int64_t *lo_p,
-		   int64_t *wmin_p)
+/* Whether the search for the line speed still has a bracket to halve:
+ * it ends within 1/256 of lo. */
+static bool ln_open(int64_t lo, int64_t hi)
 {
-	int64_t cin = p->cin, cout = p->cout, lo, hi = vm, wmin;
-	if (cin > vm) {
-		/* Above the limit (a lowered one): down to it first, and no
-		 * faster. The first ramp's boxes serve down to 1/64 below it,
-		 * which leaves the search below room. */
-		lo = vm;
-		wmin = vm - (vm >> 6);
-		ln_shapes(p, wmin, lo, am, jm);
-		if (ln_dist(p, lo, 0) > len)
-			return false;
-	} else {
-		/* To 1/256 of it. From max(cin, cout) up the distance grows
-		 * with w; below, the two ramps one way are longer than the one
-		 * ramp that w = cin gives (their times add up to more, the
-		 * extra A / J or sqrt term), so when that does not fit, nothing
-		 * does. */
-		lo = wmin = fx_max64(cin, cout);
-		if (ln_fits(p, hi, len, am, jm)) {
-			lo = hi;
-		} else {
-			if (!ln_fits(p, lo, len, am, jm))
-				return false;
-			while (hi - lo > 1 && hi - lo > lo >> 8) {
-				int64_t mid = lo + (hi - lo) / 2;
-				if (ln_fits(p, mid, len, am, jm))
-					lo = mid;
-				else
-					hi = mid;
-			}
-		}
-		ln_shapes(p, lo, lo, am, jm);
-	}
-	*lo_p = lo;
-	*wmin_p = wmin;
-	return true;
+	return hi - lo > 1 && hi - lo > lo >> 8;
 }
 
-bool traj_ln_plan(traj_ln_t *p, q32_t len, q32_t cin, q32_t cout, q32_t v, q32_t a, q32_t j)
+int traj_ln_plan_part(traj_ln_t *p, q32_t len, q32_t cin, q32_t cout, q32_t v, q32_t a, q32_t j,
+		      int64_t fits)
 {
-	int64_t vm = v - 1, am = a - 2, jm = j - 5;
-	*p = (traj_ln_t){.cin = cin, .cout = cout};
-	if (len <= 0 || am < 1 || jm < 1 || cin < 0 || cout < 0 || cout > vm)
-		return false;
-	int64_t lo, wmin, w;
-	if (!ln_top(p, len, vm, am, jm, &lo, &wmin) || lo < 1)
-		return false;
+	int64_t vm = v - 1, am = a - 2, jm = j - 5, lo = vm, hi, w, budget = fits;
+	/* The lowest speed the search for the remainder may go down to.
+	 * Above the limit (a lowered one): down to it first, and no faster;
+	 * the first ramp's boxes serve down to 1/64 below it, which leaves
+	 * the search below room. Else max(cin, cout): from there up the
+	 * distance grows with w; below, the two ramps one way are longer than
+	 * the one ramp that w = cin gives (their times add up to more, the
+	 * extra A / J or sqrt term), so when that does not fit, nothing
+	 * does. */
+	int64_t wmin = cin > vm ? vm - (vm >> 6) : fx_max64(cin, cout);
+	if (p->n >= 0) {
+		*p = (traj_ln_t){.cin = cin, .cout = cout};
+		if (len <= 0 || am < 1 || jm < 1 || cin < 0 || cout < 0 || cout > vm)
+			return 0;
+		hi = wmin;
+		if (cin > vm) {
+			ln_shapes(p, wmin, vm, am, jm);
+			if (ln_dist(p, vm, 0) > len)
+				return 0;
+		} else if (!ln_fits(p, vm, len, am, jm)) {
+			lo = wmin;
+			hi = vm;
+			if (!ln_fits(p, lo, len, am, jm))
+				return 0;
+		}
+		fits -= 2;
+	} else {
+		lo = p->w;
+		hi = p->hold;
+	}
+	/* The line's top speed lo: the fastest that fits with no ticks at
+	 * it, by bisection, the bracket kept in p between calls. */
+	while (ln_open(lo, hi) && fits-- > 0) {
+		int64_t mid = lo + (hi - lo) / 2;
+		if (ln_fits(p, mid, len, am, jm))
+			lo = mid;
+		else
+			hi = mid;
+	}
+	p->w = lo;
+	p->hold = hi;
+	p->n = -1;
+	/* The rest takes two fits' worth: a call of its own unless the
+	 * budget has them left. */
+	if (ln_open(lo, hi) || (fits < 2 && fits < budget))
+		return -1;
+	p->n = 0;
+	if (lo < 1)
+		return 0;
+	if (cin <= vm)
+		ln_shapes(p, lo, lo, am, jm); /* the boxes for lo (above: as planned) */
 	/* The ticks at it, and what is left. On the boxes planned for lo
 	 * (they serve every w from max(cin, cout) to lo), D grows with w by
 	 * about B a raw unit, less than N (traj.h): a remainder of N or more
@@ -319,7 +329,7 @@ bool traj_ln_plan(traj_ln_t *p, q32_t len, q32_t cin, q32_t cout, q32_t v, q32_t
 				   p->dip.ticks + 2 <= k) {
 				p->dsign = -1;
 			} else {
-				return false;
+				return 0;
 			}
 			top = w;
 		}
@@ -337,14 +347,20 @@ bool traj_ln_plan(traj_ln_t *p, q32_t len, q32_t cin, q32_t cout, q32_t v, q32_t
 	if (w < cout || w > vm || w < 1 ||
 	    !ramp_serves(fx_abs64(w - cin), am, jm, p->na1, p->nj1) ||
 	    !ramp_serves(w - cout, am, jm, p->na2, p->nj2))
-		return false;
+		return 0;
 	p->w = w;
 	p->hold = k;
 	p->l1 = p->na1 + p->nj1 - 1;
 	p->n = p->l1 + k + p->na2 + p->nj2 - 1;
 	p->r = p->dsign ? 0 : len - ln_dist(p, w, k); /* a bump or dip takes it all */
 	ramp_start(&p->ramp, fx_abs64(w - cin), p->na1, p->nj1);
-	return true;
+	return 1;
+}
+
+bool traj_ln_plan(traj_ln_t *p, q32_t len, q32_t cin, q32_t cout, q32_t v, q32_t a, q32_t j)
+{
+	p->n = 0;
+	return traj_ln_plan_part(p, len, cin, cout, v, a, j, INT64_MAX) > 0;
 }
 
 q32_t traj_ln_next(traj_ln_t *p)

@@ -39,7 +39,7 @@ MCU_CPU_cortex-m0 := -mcpu=cortex-m0 -mthumb -mfloat-abi=soft
 MCU_PROTO_SRC := $(filter $(addprefix proto/,cmdtab.c dispatch.c console.c fmt.c numparse.c wire.c frame.c \
 	frame_srv.c link.c port.c server.c),$(PROTO_SRC))
 MCU_BOARD_SRC := $(addprefix hal/cortexm/,startup.c systick.c uart.c loop_hal.c board_main.c \
-	small_libc.c)
+	small_libc.c udivmod64.c)
 
 .PHONY: cortexm nofloat-selftest
 
@@ -78,9 +78,10 @@ MCU_CFLAGS_proto := $(MCU_BASE) $(STRICT) $(HOST_DEFS) -DVS_NO_HELP_TEXT -DVS_NO
 	-DVS_TABLE_CRC_CONST
 MCU_CFLAGS_hal := $(MCU_BASE) -ffreestanding
 mcu_objs = $(patsubst %.c,$(MCU)/obj/%.o,$(1))
-# The board's memcpy, memset and the like are plain objects: calls to them
-# that code generation makes after link-time optimisation must find them.
-MCU_NO_LTO := $(MCU)/obj/hal/cortexm/small_libc.o
+# The board's memcpy, memset and the like, and its 64-bit division, are
+# plain objects: calls to them that code generation makes after link-time
+# optimisation must find them.
+MCU_NO_LTO := $(MCU)/obj/hal/cortexm/small_libc.o $(MCU)/obj/hal/cortexm/udivmod64.o
 $(MCU_NO_LTO): MCU_OBJ_FLAGS := -fno-lto
 
 $(MCU)/obj/%.o: %.c
@@ -107,7 +108,7 @@ $(MCU)/vehicle.elf: $(call mcu_objs,$(MCU_BOARD_SRC)) $(MCU)/libproto.a $(MCU)/l
 # mcu_tickcost.sh): the host's scenarios on the same libraries and board code.
 MCU_CFLAGS_tools := $(MCU_BASE)
 MCU_BENCH_SRC := $(addprefix tools/bench/,mcu_tickcost.c scenario.c rig.c) \
-	$(addprefix hal/cortexm/,startup.c systick.c uart.c loop_hal.c)
+	$(addprefix hal/cortexm/,startup.c systick.c uart.c loop_hal.c small_libc.c udivmod64.c)
 $(MCU)/bench.elf: $(call mcu_objs,$(MCU_BENCH_SRC)) $(MCU)/libfirmware.a hal/cortexm/$(TARGET).ld
 	@$(if $(Q),echo "  LD      $@")
 	$(Q)$(ARM_CC) $(MCU_CPU_$(TARGET)) -Os -flto $(MCU_LTO_LINK) -nostartfiles --specs=nano.specs \

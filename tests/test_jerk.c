@@ -199,7 +199,7 @@ static void test_ln_random(void **state)
 {
 	(void)state;
 	srand(13);
-	int planned = 0, refused = 0, dips = 0;
+	int planned = 0, refused = 0, dips = 0, parts = 0;
 	for (int i = 0; i < 3000; i++) {
 		double hz = (i & 1) ? 1000 : 250;
 		double vv = 20 + rand() % 980, aa = 50 + rand() % 2000, jj = 500 + rand() % 20000;
@@ -213,7 +213,17 @@ static void test_ln_random(void **state)
 		/* Too short to go from cin to cout: the ramp between them alone. */
 		double c1 = cin / Q, c2 = cout / Q, ap = a / Q, jp = j / Q;
 		double need = (c1 + c2) / 2 * ramp_time(fabs(c1 - c2), ap, jp);
-		if (!traj_ln_plan(&p, len, cin, cout, v, a, j)) {
+		bool ok = traj_ln_plan(&p, len, cin, cout, v, a, j);
+		/* In parts, a few trial lines a call: the same plan. */
+		traj_ln_t q = {.n = 0};
+		int r = -1, calls = 0;
+		while (r < 0 && calls++ < 40)
+			r = traj_ln_plan_part(&q, len, cin, cout, v, a, j, 1 + i % 3);
+		assert_int_equal(r, ok);
+		if (ok)
+			assert_memory_equal(&p, &q, sizeof p);
+		parts = calls > parts ? calls : parts;
+		if (!ok) {
 			refused++;
 			if (cin < v && need < 0.95 * (len / Q))
 				dips++;
@@ -234,8 +244,9 @@ static void test_ln_random(void **state)
 		if (c1 < vp && ideal + vp * hz < len / Q)
 			assert_true(p.w >= v - v / 128);
 	}
-	printf("lines: %d planned, %d refused, %d of them with 5 %% room\n", planned, refused,
-	       dips);
+	printf(
+	    "lines: %d planned, %d refused, %d of them with 5 %% room; up to %d calls in parts\n",
+	    planned, refused, dips, parts);
 	/* The refusals with room are lines whose speed is pinned at cin or
 	 * cout with a short hold: the remainder then fits in neither a bump
 	 * nor a dip (the callers fall back, motion_path.c). The counts are
@@ -992,6 +1003,7 @@ static void test_cruise_s_curve(void **state)
  * lands on its last waypoint. */
 typedef struct {
 	bool ahead;
+	int budget; /* the plan budget, and 3 idle calls a tick (the board's) */
 	q32_t *trace;
 	int n, starts, flips;
 } blend_t;
@@ -1001,9 +1013,8 @@ typedef struct {
  * whether that plan is the one made ahead (the buffers switched). */
 static void blend_tick(jrig_t *r, blend_t *b)
 {
-	if (b->ahead)
-		while (motion_plan_idle(&r->m))
-			;
+	for (int i = 0; b->ahead && (!b->budget || i < 3) && motion_plan_idle(&r->m); i++)
+		;
 	bool was_on = r->m.ln_on;
 	uint8_t was_i = r->m.ln_i;
 	int64_t was_k = r->m.lnb[r->m.ln_i].k;
@@ -1019,6 +1030,7 @@ static void run_blend(jrig_t *r, int leg, blend_t *b)
 	const q32_t l = (q32_t)leg << 32;
 	const q32_t wp[3][2] = {{l, 0}, {l, l}, {2 * l, l}};
 	jrig_init(r, MOTION_KIN_DIFF);
+	motion_set_plan_budget(&r->m, (uint8_t)b->budget);
 	b->n = b->starts = b->flips = 0;
 	for (int k = 0; k < 3; k++) {
 		assert_true(motion_cruise_abs(&r->m, wp[k][0], wp[k][1]));
@@ -1040,10 +1052,13 @@ static void test_blend_planned_ahead(void **state)
 	static q32_t t1[20000], t2[20000];
 	static jrig_t r;
 	static const int legs[2] = {300, 600};
-	for (int g = 0; g < 2; g++) {
-		blend_t b1 = {.ahead = false, .trace = t1}, b2 = {.ahead = true, .trace = t2};
-		run_blend(&r, legs[g], &b1);
-		run_blend(&r, legs[g], &b2);
+	for (int g = 0; g < 4; g++) {
+		/* Ahead in one call, or in parts: a trial line a call, three
+		 * calls between two ticks, as a board's main loop. */
+		blend_t b1 = {.ahead = false, .trace = t1},
+			b2 = {.ahead = true, .budget = g / 2, .trace = t2};
+		run_blend(&r, legs[g % 2], &b1);
+		run_blend(&r, legs[g % 2], &b2);
 		assert_int_equal(b1.n, b2.n);
 		for (int i = 0; i < b1.n; i++)
 			assert_int_equal(t1[i], t2[i]);

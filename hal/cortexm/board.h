@@ -13,6 +13,11 @@
 #ifndef BOARD_CPU_HZ
 #define BOARD_CPU_HZ 25000000u /* MPS2 FPGA images run the core at 25 MHz */
 #endif
+/* The planning a request or an idle call of the main loop takes at most
+ * (vehicle_set_plan_budget): queued waypoints a corner-speed pass walks,
+ * trial lines a cruise line's plan ahead runs. A whole pass over the
+ * 16-deep queue costs about a period at 25 MHz (docs/performance.md). */
+#define BOARD_PLAN_BUDGET 2u
 #ifndef BOARD_UART_BASE
 #define BOARD_UART_BASE 0x40004000u /* CMSDK UART0 */
 #endif

@@ -12,8 +12,6 @@
 #include "loop_hal.h"
 #include "proto/server.h"
 
-enum { PLAN_BUDGET = 2 };
-
 static loop_hal_t plant;
 static vehicle_t unit;
 static vs_server_t srv; /* the console and the binary frames on the UART */
@@ -50,10 +48,9 @@ static __attribute__((noinline)) uint32_t unit_init(void)
 	if (vehicle_init(&unit, &cfg, &hal, NULL) != 0)
 		for (;;)
 			;
-	/* A request walks at most PLAN_BUDGET queued waypoints of the corner
-	 * speed planning, the idle passes the rest: a whole pass over the
-	 * 16-deep queue costs about a period at 25 MHz (docs/performance.md). */
-	vehicle_set_plan_budget(&unit, PLAN_BUDGET);
+	/* A request walks a few queued waypoints of the corner speed planning,
+	 * the idle calls the rest, and a few trial lines of a line's plan each. */
+	vehicle_set_plan_budget(&unit, BOARD_PLAN_BUDGET);
 	return cfg.tick_hz;
 }
 
