@@ -733,17 +733,19 @@ static bool plan_ahead_at(motion_t *m, q32_t len, q32_t cin, q32_t cout, q32_t v
 {
 	const q32_t key[6] = {len, cin, cout, v, a, j};
 	traj_ln_t *ln = ln_ahead(m);
+	if (len <= 0 || j == 0)
+		return false;
 	/* A key tried, planned or not, is not tried again; one being planned
 	 * goes on. */
 	bool same = m->ln_next != LN_NEXT_NONE;
-	for (int i = 0; i < 6 && same; i++)
-		same = key[i] == m->ln_key[i];
-	if ((same && m->ln_next != LN_NEXT_PART) || len <= 0 || j == 0)
+	for (int i = 0; i < 6; i++) {
+		same = same && key[i] == m->ln_key[i];
+		m->ln_key[i] = key[i];
+	}
+	if (same && m->ln_next != LN_NEXT_PART)
 		return false;
 	if (!same)
 		ln->n = 0;
-	for (int i = 0; i < 6; i++)
-		m->ln_key[i] = key[i];
 	/* A budget bounds the trial lines a call takes (the board's main loop
 	 * runs the tick between calls). */
 	int r = traj_ln_plan_part(ln, len, cin, cout, v, a, j,

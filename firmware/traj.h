@@ -218,13 +218,14 @@ int64_t traj_sc_ticks_bound(q32_t d, q32_t a, q32_t j);
 int64_t traj_mul_sat(int64_t x, int64_t y);
 /* A planned jerk-limited line between speeds and its sampler (section 6). */
 typedef struct {
-	traj_sc_t ramp;		    /* the ramp running (phases 0 and 2) */
-	traj_sc_t dip;		    /* off w in the hold (ticks 0: none) */
-	int64_t dsign;		    /* above w (1) or below (-1) */
+	int64_t dsign;		    /* a dip above w (1), below (-1), or none (0) */
 	int64_t na1, nj1, na2, nj2; /* the ramps' box lengths (0: no ramp) */
 	int64_t cin, w, cout;	    /* speeds in, on the line, out */
 	int64_t l1, hold, n;	    /* ticks: first ramp, at w, in all (< 0: planning) */
 	int64_t r, racc, k;	    /* the spread remainder, its sum, ticks taken */
+	/* Last: a plan sets the members above afresh, these as it needs them. */
+	traj_sc_t ramp; /* the ramp running (phases 0 and 2) */
+	traj_sc_t dip;	/* off w in the hold, when dsign is not 0 */
 } traj_ln_t;
 
 /* Plans len (> 0) from speed cin to cout (each at most v - 1) at speed at

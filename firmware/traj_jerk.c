@@ -1,6 +1,8 @@
 /* Jerk-limited profiles (derivation in traj.h, sections 4 and 5). */
 #include "traj.h"
 
+#include <stddef.h>
+
 /* Box lengths whose product P reaches this are refused: the sampler adds
  * remainders below P in pairs. */
 #define SC_P_LIMIT ((int64_t)1 << 62)
@@ -9,11 +11,9 @@
  * 64-bit arithmetic cost flash on a 32-bit core. */
 __attribute__((noinline)) int64_t traj_mul_sat(int64_t x, int64_t y)
 {
-	/* Both below 2^31, or fewer than 64 significant bits between them:
-	 * the product is below 2^63, no division (a library call of some 100
-	 * instructions on a 32-bit core; speeds from 0.5 m/s are 2^31 raw). */
-	if (((uint64_t)x | (uint64_t)y) >> 31 == 0 || x == 0 ||
-	    __builtin_clzll((uint64_t)x) + __builtin_clzll((uint64_t)y) > 64)
+	/* Both below 2^31: the product fits, no division (a library call of
+	 * some 100 instructions on a 32-bit core). */
+	if (((uint64_t)x | (uint64_t)y) >> 31 == 0)
 		return x * y;
 	return x > INT64_MAX / y ? INT64_MAX : x * y;
 }
@@ -261,7 +261,12 @@ int traj_ln_plan_part(traj_ln_t *p, q32_t len, q32_t cin, q32_t cout, q32_t v, q
 	 * does. */
 	int64_t wmin = cin > vm ? vm - (vm >> 6) : fx_max64(cin, cout);
 	if (p->n >= 0) {
-		*p = (traj_ln_t){.cin = cin, .cout = cout};
+		/* The members before the S-curves (ramp_start and traj_sc_plan
+		 * set those): a third of the struct to clear on a tick that
+		 * plans a tail. */
+		__builtin_memset(p, 0, offsetof(traj_ln_t, ramp));
+		p->cin = cin;
+		p->cout = cout;
 		if (len <= 0 || am < 1 || jm < 1 || cin < 0 || cout < 0 || cout > vm)
 			return 0;
 		hi = wmin;
@@ -337,7 +342,7 @@ int traj_ln_plan_part(traj_ln_t *p, q32_t len, q32_t cin, q32_t cout, q32_t v, q
 			/* D is linear in w but for the floors (slope B, twice it
 			 * b2): a step from wmin, then a unit or two either way. */
 			int64_t b2 = p->na1 + p->nj1 + p->na2 + p->nj2 + 2 * k - 2;
-			w = fx_min64(top, w + 2 * (len - ln_dist(p, w, k)) / b2);
+			w = fx_min64(top, w - 2 * over / b2);
 			while (w > wmin && ln_dist(p, w, k) > len)
 				w--;
 			while (w < top && ln_dist(p, w + 1, k) <= len)
@@ -357,7 +362,9 @@ int traj_ln_plan_part(traj_ln_t *p, q32_t len, q32_t cin, q32_t cout, q32_t v, q
 	return 1;
 }
 
-bool traj_ln_plan(traj_ln_t *p, q32_t len, q32_t cin, q32_t cout, q32_t v, q32_t a, q32_t j)
+/* Out of line: each inlined call passes its seven arguments again. */
+__attribute__((noinline)) bool traj_ln_plan(traj_ln_t *p, q32_t len, q32_t cin, q32_t cout, q32_t v,
+					    q32_t a, q32_t j)
 {
 	p->n = 0;
 	return traj_ln_plan_part(p, len, cin, cout, v, a, j, INT64_MAX) > 0;
@@ -374,7 +381,7 @@ q32_t traj_ln_next(traj_ln_t *p)
 	} else if (k < p->l1 + p->hold) {
 		/* A tick at w either side of a dip: its jerks and the ramps'
 		 * never meet. */
-		u = k > p->l1 ? p->w + p->dsign * traj_sc_next(&p->dip) : p->w;
+		u = k > p->l1 && p->dsign ? p->w + p->dsign * traj_sc_next(&p->dip) : p->w;
 	} else {
 		if (k == p->l1 + p->hold)
 			ramp_start(&p->ramp, p->w - p->cout, p->na2, p->nj2);

@@ -31,7 +31,7 @@ size_t vehicle_put_dec(char *b, size_t cap, size_t pos, uint32_t val, unsigned m
 
 size_t vehicle_put_hex4(char *b, size_t cap, size_t pos, uint16_t val)
 {
-	static const char hex[] = "0123456789ABCDEF";
+	const char *const hex = "0123456789ABCDEF"; /* one copy, shared */
 	pos = vehicle_put_str(b, cap, pos, "0x");
 	for (int sh = 12; sh >= 0; sh -= 4) {
 		if (pos + 1 < cap)

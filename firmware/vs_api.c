@@ -339,7 +339,8 @@ bool vs_setPosition(vehicle_t *v, vs_position_t pos)
 
 bool vs_moveForward(vehicle_t *v, vs_real_t x_)
 {
-	static const char op[] = "moveForward";
+	/* The literal, not an array: one copy with the command table's. */
+	const char *const op = "moveForward";
 	if (!within(x_, POS_MAX_MM))
 		return vehicle_refuse(v, op, ALM_W_BAD_ARGUMENT);
 	if (!vehicle_move_gate(v, op, VEHICLE_GATE_READY))
@@ -351,7 +352,7 @@ bool vs_moveForward(vehicle_t *v, vs_real_t x_)
 
 bool vs_moveTurn(vehicle_t *v, vs_real_t theta_)
 {
-	static const char op[] = "moveTurn";
+	const char *const op = "moveTurn";
 	if (!within(theta_, ANGLE_MAX_DEG))
 		return vehicle_refuse(v, op, ALM_W_BAD_ARGUMENT);
 	if (!vehicle_move_gate(v, op, VEHICLE_GATE_READY))
@@ -363,7 +364,7 @@ bool vs_moveTurn(vehicle_t *v, vs_real_t theta_)
 
 bool vs_moveLinearRel(vehicle_t *v, vs_position_t pos)
 {
-	static const char op[] = "moveLinearRel";
+	const char *const op = "moveLinearRel";
 	if (!pose_ok(&pos))
 		return vehicle_refuse(v, op, ALM_W_BAD_ARGUMENT);
 	if (!vehicle_move_gate(v, op, VEHICLE_GATE_READY))
@@ -376,7 +377,7 @@ bool vs_moveLinearRel(vehicle_t *v, vs_position_t pos)
 
 bool vs_moveCircularRel(vehicle_t *v, vs_point_t centerPoint, vs_real_t theta)
 {
-	static const char op[] = "moveCircularRel";
+	const char *const op = "moveCircularRel";
 	if (!within(centerPoint.x, POS_MAX_MM) || !within(centerPoint.y, POS_MAX_MM) ||
 	    !within(theta, ANGLE_MAX_DEG))
 		return vehicle_refuse(v, op, ALM_W_BAD_ARGUMENT);
@@ -393,7 +394,7 @@ bool vs_moveCircularRel(vehicle_t *v, vs_point_t centerPoint, vs_real_t theta)
 
 bool vs_moveLinearAbs(vehicle_t *v, vs_position_t pos)
 {
-	static const char op[] = "moveLinearAbs";
+	const char *const op = "moveLinearAbs";
 	if (!pose_ok(&pos))
 		return vehicle_refuse(v, op, ALM_W_BAD_ARGUMENT);
 	if (!vehicle_move_gate(v, op, VEHICLE_GATE_SERVO))
@@ -406,7 +407,7 @@ bool vs_moveLinearAbs(vehicle_t *v, vs_position_t pos)
 
 bool vs_moveCruiseAbs(vehicle_t *v, vs_point_t cruisePoint)
 {
-	static const char op[] = "moveCruiseAbs";
+	const char *const op = "moveCruiseAbs";
 	if (!within(cruisePoint.x, POS_MAX_MM) || !within(cruisePoint.y, POS_MAX_MM))
 		return vehicle_refuse(v, op, ALM_W_BAD_ARGUMENT);
 	if (!vehicle_move_gate(v, op, VEHICLE_GATE_SERVO))
@@ -418,7 +419,7 @@ bool vs_moveCruiseAbs(vehicle_t *v, vs_point_t cruisePoint)
 
 bool vs_moveContinuousRel(vehicle_t *v, vs_position_t pos)
 {
-	static const char op[] = "moveContinuousRel";
+	const char *const op = "moveContinuousRel";
 	if (!pose_ok(&pos))
 		return vehicle_refuse(v, op, ALM_W_BAD_ARGUMENT);
 	if (!vehicle_move_gate(v, op, VEHICLE_GATE_SERVO))
@@ -431,7 +432,7 @@ bool vs_moveContinuousRel(vehicle_t *v, vs_position_t pos)
 
 bool vs_moveJog(vehicle_t *v, vs_real_t xVel, vs_real_t yVel, vs_real_t thetaVel)
 {
-	static const char op[] = "moveJog";
+	const char *const op = "moveJog";
 	if (!vs_real_finite(xVel) || !vs_real_finite(yVel) || !vs_real_finite(thetaVel))
 		return vehicle_refuse(v, op, ALM_W_BAD_ARGUMENT);
 	/* Spec 6.6: magnitudes within the limits; signs reverse; zero stops. */

@@ -111,7 +111,7 @@ static bool plain_byte(unsigned char b)
  * and non-ASCII bytes, so that a reply is always one printable line. */
 static size_t escape_byte(char e[4], unsigned char b)
 {
-	static const char hex[] = "0123456789ABCDEF";
+	const char *const hex = "0123456789ABCDEF"; /* one copy, shared */
 
 	e[0] = '\\';
 	if (b == '"' || b == '\\') {

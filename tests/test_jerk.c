@@ -209,7 +209,7 @@ static void test_ln_random(void **state)
 		q32_t cout = (rand() % 3) ? (q32_t)((double)(v - 1) * (rand() % 1001) / 1000) : 0;
 		double dd = 0.001 + (rand() % 3000000) / 1000.0;
 		q32_t len = (q32_t)(dd * Q);
-		traj_ln_t p;
+		traj_ln_t p = {.n = 0}; /* the dip as the other, unless planned */
 		/* Too short to go from cin to cout: the ramp between them alone. */
 		double c1 = cin / Q, c2 = cout / Q, ap = a / Q, jp = j / Q;
 		double need = (c1 + c2) / 2 * ramp_time(fabs(c1 - c2), ap, jp);

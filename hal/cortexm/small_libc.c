@@ -116,6 +116,10 @@ NO_LOOP_CALLS void *memset(void *dst, int c, size_t n)
 	for (; n && ((uintptr_t)d & 3u); n--)
 		*d++ = (unsigned char)c;
 	word_t w = (unsigned char)c * 0x01010101u, *dw = (word_t *)(void *)d;
+	/* Four words a turn: a struct cleared on the tick (a line's plan,
+	 * 0.1 KiB) costs half the instructions. */
+	for (; n >= 16; n -= 16, dw += 4)
+		dw[0] = dw[1] = dw[2] = dw[3] = w;
 	for (; n >= 4; n -= 4)
 		*dw++ = w;
 	d = (unsigned char *)dw;

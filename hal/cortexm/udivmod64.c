@@ -87,6 +87,56 @@ uint64_t board_udivmod64(uint64_t n, uint64_t d, uint64_t *rem)
 /* The library's name and contract (uint64_t is unsigned long long here).
  * A core without a divide instruction (ARMv6-M) keeps the library's: each
  * 32-bit division would be a call of its own. */
-unsigned long long __udivmoddi4(unsigned long long n, unsigned long long d, unsigned long long *rem)
-    __attribute__((alias("board_udivmod64")));
+unsigned long long __udivmoddi4(unsigned long long n, unsigned long long d,
+				unsigned long long *rem) __attribute__((alias("board_udivmod64")));
+
+/* The run-time ABI's entries the compiler calls for / and % on 64-bit
+ * operands (n in r0:r1, d in r2:r3; quotient back in r0:r1, remainder in
+ * r2:r3, which C cannot return): the remainder through a slot on the
+ * stack, the signed one on magnitudes, the quotient negative when the
+ * signs differ, the remainder with the numerator's sign. 0.2 KiB less than
+ * the library's. A negation of hi:lo is negs lo; sbc hi, hi, hi, lsl #1. */
+void __aeabi_uldivmod(void);
+void __aeabi_ldivmod(void);
+__attribute__((naked, used)) void __aeabi_uldivmod(void)
+{
+	__asm volatile("push	{r4, lr}\n"
+		       "sub	sp, sp, #16\n"
+		       "add	r4, sp, #8\n"
+		       "str	r4, [sp]\n"
+		       "bl	board_udivmod64\n"
+		       "ldrd	r2, r3, [sp, #8]\n"
+		       "add	sp, sp, #16\n"
+		       "pop	{r4, pc}\n");
+}
+
+__attribute__((naked, used)) void __aeabi_ldivmod(void)
+{
+	__asm volatile("push	{r4, r5, r6, lr}\n"
+		       "sub	sp, sp, #16\n"
+		       "eor	r4, r1, r3\n"
+		       "mov	r5, r1\n"
+		       "cmp	r1, #0\n"
+		       "bge	1f\n"
+		       "negs	r0, r0\n"
+		       "sbc	r1, r1, r1, lsl #1\n"
+		       "1: cmp	r3, #0\n"
+		       "bge	2f\n"
+		       "negs	r2, r2\n"
+		       "sbc	r3, r3, r3, lsl #1\n"
+		       "2: add	r6, sp, #8\n"
+		       "str	r6, [sp]\n"
+		       "bl	board_udivmod64\n"
+		       "ldrd	r2, r3, [sp, #8]\n"
+		       "cmp	r4, #0\n"
+		       "bge	3f\n"
+		       "negs	r0, r0\n"
+		       "sbc	r1, r1, r1, lsl #1\n"
+		       "3: cmp	r5, #0\n"
+		       "bge	4f\n"
+		       "negs	r2, r2\n"
+		       "sbc	r3, r3, r3, lsl #1\n"
+		       "4: add	sp, sp, #16\n"
+		       "pop	{r4, r5, r6, pc}\n");
+}
 #endif
