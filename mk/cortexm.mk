@@ -50,16 +50,11 @@ MCU := $(BUILD)/$(TARGET)$(if $(filter omni,$(MCU_KIN)),-omni)
 # A 16-deep motion queue (2 kB of RAM less than the host's 32). The
 # boundary's numbers in Q32, not double (firmware/real.h): no floating point
 # in the image; -Wfloat-conversion catches a double constant handed to it
-# without VS_REAL(). The jerk-limited profiles that start or end at speed
-# are left out for now. On the M4 they need 164 bytes of flash more than the
-# budget (348 for the mecanum base), and they plan a line ahead of the tick
-# in one idle call, 9,200 instructions at the MPS2 board's 25 MHz (the rule
-# is a quarter of a period), and the continuous goal's tail in the tick
-# (7,828, a hair over the half a tick may take), see docs/jerk.md. On the M0
-# they would not fit (53 KiB). The board runs their acceleration-limited
-# forms.
+# without VS_REAL(). The M4 carries every jerk-limited profile (docs/jerk.md,
+# docs/mcu.md: how the room was made); the M0 leaves out those that start or
+# end at speed (53 KiB with them) and runs their acceleration-limited forms.
 MCU_DEFS := -DMOTION_QUEUE_LEN=16 -DVS_REAL_Q32 -Wfloat-conversion -DVS_KIN_ONLY=$(MCU_KIN_ONLY) \
-	-DMOTION_NO_ONLINE_JERK
+	$(if $(filter cortex-m0,$(TARGET)),-DMOTION_NO_ONLINE_JERK)
 # Link-time optimisation: inlining and dead-code removal across files saves
 # a tenth of the flash (49.4 KiB -> 44.5 KiB when it was brought in). Fat
 # objects keep their machine code too, which check_nofloat.sh reads.
@@ -115,6 +110,16 @@ $(MCU)/bench.elf: $(call mcu_objs,$(MCU_BENCH_SRC)) $(MCU)/libfirmware.a hal/cor
 		-Wl,--gc-sections -T hal/cortexm/$(TARGET).ld \
 		-o $@ $(filter %.o %.a,$^) -lm -lc -lnosys -lgcc
 
+# The image's 64-bit division on the board (tests/mcu/divcheck.c), against
+# a bitwise one: the objects of the image that carry it, nothing else.
+MCU_CFLAGS_tests := $(MCU_BASE)
+MCU_DIVCHECK_SRC := tests/mcu/divcheck.c $(addprefix hal/cortexm/,startup.c small_libc.c udivmod64.c)
+$(MCU)/divcheck.elf: $(call mcu_objs,$(MCU_DIVCHECK_SRC)) hal/cortexm/$(TARGET).ld
+	@$(if $(Q),echo "  LD      $@")
+	$(Q)$(ARM_CC) $(MCU_CPU_$(TARGET)) -Os -flto $(MCU_LTO_LINK) -nostartfiles --specs=nano.specs \
+		-Wl,--gc-sections -T hal/cortexm/$(TARGET).ld \
+		-o $@ $(filter %.o %.a,$^) -lc -lnosys -lgcc
+
 # Every object of the image: none may use floating point.
 MCU_IMAGE_OBJS := $(call mcu_objs,$(FW_SRC) $(MCU_PROTO_SRC) $(MCU_BOARD_SRC))
 
@@ -166,7 +171,7 @@ check: nofloat-selftest
 .PHONY: mcu-images
 mcu-images:
 	$(Q)$(MAKE) --no-print-directory TARGET=cortex-m4 BUILD=$(BUILD) cortexm \
-		$(BUILD)/cortex-m4/bench.elf
+		$(BUILD)/cortex-m4/bench.elf $(BUILD)/cortex-m4/divcheck.elf
 	$(Q)$(MAKE) --no-print-directory TARGET=cortex-m4 MCU_KIN=omni BUILD=$(BUILD) cortexm
 	$(Q)$(MAKE) --no-print-directory TARGET=cortex-m0 BUILD=$(BUILD) cortexm
 

@@ -1,9 +1,11 @@
-/* 64-bit unsigned division for the board, in place of libgcc's
- * __udivmoddi4 (which __aeabi_uldivmod and __aeabi_ldivmod call): long
- * division on the core's own 32-bit divide, 0.4 KiB less flash than the
- * library's generic C, the ticks within 2 % of their cost with it
- * (docs/mcu.md). The linker takes it before the library's. tests/test_udivmod64.c checks it against
- * the host's division.
+/* 64-bit division for a board with a divide instruction, in place of
+ * libgcc's: __udivmoddi4 and the run-time ABI's entries that the compiler
+ * calls for / and % (__aeabi_uldivmod, __aeabi_ldivmod). Long division on
+ * the core's own 32-bit divide: 0.6 KiB less flash than the library's, the
+ * ticks within 2 % of their cost with it (docs/mcu.md). The linker takes
+ * these before the library's. tests/test_udivmod64.c checks the division
+ * against the host's; tests/mcu/divcheck.c the entries on the emulated
+ * board, against a bitwise division of its own.
  *
  * The step that does the work divides a 64-bit (u1:u0) by a 32-bit v with
  * its top bit set, u1 < v, so that the quotient fits 32 bits: two 16-bit
@@ -87,8 +89,8 @@ uint64_t board_udivmod64(uint64_t n, uint64_t d, uint64_t *rem)
 /* The library's name and contract (uint64_t is unsigned long long here).
  * A core without a divide instruction (ARMv6-M) keeps the library's: each
  * 32-bit division would be a call of its own. */
-unsigned long long __udivmoddi4(unsigned long long n, unsigned long long d,
-				unsigned long long *rem) __attribute__((alias("board_udivmod64")));
+unsigned long long __udivmoddi4(unsigned long long n, unsigned long long d, unsigned long long *rem)
+    __attribute__((alias("board_udivmod64")));
 
 /* The run-time ABI's entries the compiler calls for / and % on 64-bit
  * operands (n in r0:r1, d in r2:r3; quotient back in r0:r1, remainder in

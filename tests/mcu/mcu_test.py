@@ -871,11 +871,21 @@ def c_tick_bench(bench_elf):
     assert re.search(r"^  target: worst tick < 10 %.*\n.* -> met$", r.stdout, re.M), r.stdout
 
 
+def c_div_check(elf):
+    """The image's 64-bit division (hal/cortexm/udivmod64.c) on the board,
+    against the bitwise one of tests/mcu/divcheck.c: exit status 0."""
+    r = subprocess.run(["qemu-system-arm", "-M", "mps2-an386", "-nographic", "-monitor", "none",
+                        "-semihosting-config", "enable=on,target=native",
+                        "-icount", "shift=%d,sleep=off" % ICOUNT_SHIFT, "-kernel", elf],
+                       capture_output=True, text=True, timeout=REPLY_S)
+    assert r.returncode == 0, "divcheck: status %d %s" % (r.returncode, r.stdout + r.stderr)
+
+
 def c_jerk_moves(b):
     """Under jerk limits (docs/jerk.md): a straight move on the S-curve, a
-    blended route and a continuous goal (the board runs their
-    acceleration-limited forms, mk/cortexm.mk); each lands within a count,
-    and no tick overruns."""
+    blended route (its lines planned ahead in parts, between ticks) and a
+    continuous goal on its jerk-limited law; each lands within a count, and
+    no tick overruns."""
     expect(b, "$jerk 2000 1000", "ok jerk 2000.000 1000.000 limit 0.000 0.000")
     ready(b)
     expect(b, "moveForward 200", "ok true")
@@ -948,6 +958,7 @@ def main():
             except Exception as e2:
                 print("  no state after it: %s" % e2)
 
+    run("div_check", c_div_check, os.path.join(build, "cortex-m4", "divcheck.elf"))
     run("tick_bench", c_tick_bench, os.path.join(build, "cortex-m4", "bench.elf"))
     with tempfile.TemporaryDirectory() as tmp:
         for elf, machine, cases in (

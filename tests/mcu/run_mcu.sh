@@ -9,7 +9,8 @@ build=${1:-build}
 for f in qemu-system-arm arm-none-eabi-nm; do
 	command -v $f >/dev/null || { echo "mcu: $f missing (tools/deps.sh)"; echo "mcu: 0 passed, 1 failed"; exit 1; }
 done
-for f in "$build/cortex-m4/vehicle.elf" "$build/cortex-m4/bench.elf" "$build/cortex-m4-omni/vehicle.elf" \
+for f in "$build/cortex-m4/vehicle.elf" "$build/cortex-m4/bench.elf" "$build/cortex-m4/divcheck.elf" \
+	"$build/cortex-m4-omni/vehicle.elf" \
 	"$build/cortex-m0/vehicle.elf" \
 	"$build/vehiclectl"; do
 	[ -f "$f" ] || { echo "mcu: $f missing (make check builds it)"; echo "mcu: 0 passed, 1 failed"; exit 1; }
