@@ -247,19 +247,14 @@ static bool ln_open(int64_t lo, int64_t hi)
 	return hi - lo > 1 && hi - lo > lo >> 8;
 }
 
-int traj_ln_plan_part(traj_ln_t *p, q32_t len, q32_t cin, q32_t cout, q32_t v, q32_t a, q32_t j,
-		      int64_t fits)
+/* The line's top speed lo: the fastest that fits with no ticks at it, by
+ * bisection, at most *fits trial lines in this call; the bracket (lo, hi)
+ * kept in p->w and p->hold between calls (p->n = -1). A call with p->n >= 0
+ * begins afresh. False when not even the ramp from cin to cout fits. */
+static bool ln_search(traj_ln_t *p, q32_t len, q32_t cin, q32_t cout, int64_t vm, int64_t am,
+		      int64_t jm, int64_t wmin, int64_t *fits)
 {
-	int64_t vm = v - 1, am = a - 2, jm = j - 5, lo = vm, hi, w, budget = fits;
-	/* The lowest speed the search for the remainder may go down to.
-	 * Above the limit (a lowered one): down to it first, and no faster;
-	 * the first ramp's boxes serve down to 1/64 below it, which leaves
-	 * the search below room. Else max(cin, cout): from there up the
-	 * distance grows with w; below, the two ramps one way are longer than
-	 * the one ramp that w = cin gives (their times add up to more, the
-	 * extra A / J or sqrt term), so when that does not fit, nothing
-	 * does. */
-	int64_t wmin = cin > vm ? vm - (vm >> 6) : fx_max64(cin, cout);
+	int64_t lo = vm, hi = wmin;
 	if (p->n >= 0) {
 		/* The members before the S-curves (ramp_start and traj_sc_plan
 		 * set those): a third of the struct to clear on a tick that
@@ -268,26 +263,23 @@ int traj_ln_plan_part(traj_ln_t *p, q32_t len, q32_t cin, q32_t cout, q32_t v, q
 		p->cin = cin;
 		p->cout = cout;
 		if (len <= 0 || am < 1 || jm < 1 || cin < 0 || cout < 0 || cout > vm)
-			return 0;
-		hi = wmin;
+			return false;
 		if (cin > vm) {
 			ln_shapes(p, wmin, vm, am, jm);
 			if (ln_dist(p, vm, 0) > len)
-				return 0;
+				return false;
 		} else if (!ln_fits(p, vm, len, am, jm)) {
 			lo = wmin;
 			hi = vm;
 			if (!ln_fits(p, lo, len, am, jm))
-				return 0;
+				return false;
 		}
-		fits -= 2;
+		*fits -= 2;
 	} else {
 		lo = p->w;
 		hi = p->hold;
 	}
-	/* The line's top speed lo: the fastest that fits with no ticks at
-	 * it, by bisection, the bracket kept in p between calls. */
-	while (ln_open(lo, hi) && fits-- > 0) {
+	while (ln_open(lo, hi) && (*fits)-- > 0) {
 		int64_t mid = lo + (hi - lo) / 2;
 		if (ln_fits(p, mid, len, am, jm))
 			lo = mid;
@@ -297,9 +289,28 @@ int traj_ln_plan_part(traj_ln_t *p, q32_t len, q32_t cin, q32_t cout, q32_t v, q
 	p->w = lo;
 	p->hold = hi;
 	p->n = -1;
+	return true;
+}
+
+int traj_ln_plan_part(traj_ln_t *p, q32_t len, q32_t cin, q32_t cout, q32_t v, q32_t a, q32_t j,
+		      int64_t fits)
+{
+	int64_t vm = v - 1, am = a - 2, jm = j - 5, w, budget = fits;
+	/* The lowest speed the search for the remainder may go down to.
+	 * Above the limit (a lowered one): down to it first, and no faster;
+	 * the first ramp's boxes serve down to 1/64 below it, which leaves
+	 * the search below room. Else max(cin, cout): from there up the
+	 * distance grows with w; below, the two ramps one way are longer than
+	 * the one ramp that w = cin gives (their times add up to more, the
+	 * extra A / J or sqrt term), so when that does not fit, nothing
+	 * does. */
+	int64_t wmin = cin > vm ? vm - (vm >> 6) : fx_max64(cin, cout);
+	if (!ln_search(p, len, cin, cout, vm, am, jm, wmin, &fits))
+		return 0;
+	int64_t lo = p->w;
 	/* The rest takes two fits' worth: a call of its own unless the
 	 * budget has them left. */
-	if (ln_open(lo, hi) || (fits < 2 && fits < budget))
+	if (ln_open(lo, p->hold) || (fits < 2 && fits < budget))
 		return -1;
 	p->n = 0;
 	if (lo < 1)

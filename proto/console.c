@@ -303,6 +303,13 @@ __attribute__((format(printf, 3, 4))) static bool reply_error(console_t *c, rbuf
 	return true;
 }
 
+/* An extra's wrong argument count: "takes" the counts it takes, in words.
+ * One format for them all (a board's flash counts its strings). */
+static bool reply_arity(console_t *c, rbuf_t *r, const char *cmd, const char *takes, unsigned ntok)
+{
+	return reply_error(c, r, "%d %s takes %s, got %u", CONSOLE_E_ARITY, cmd, takes, ntok - 1);
+}
+
 static const char *mode_name(uint8_t m)
 {
 	static const char *const names[MOTION_MODE_COUNT] = {
@@ -372,8 +379,7 @@ static bool exec_config(console_t *c, char **argv, unsigned ntok, rbuf_t *r)
 	const vs_config_field_t *f = vs_config_fields;
 
 	if (ntok > 2)
-		return reply_error(c, r, "%d $config takes 0 or 1 argument, got %u",
-				   CONSOLE_E_ARITY, ntok - 1);
+		return reply_arity(c, r, "$config", "0 or 1 argument", ntok);
 	if (ntok == 1) {
 		rb_puts(r, "ok");
 		for (; f < vs_config_fields + VS_CONFIG_NFIELDS; f++) {
@@ -410,8 +416,7 @@ static bool exec_jerk(console_t *c, char **argv, unsigned ntok, rbuf_t *r)
 {
 	vs_real_t jt, jr;
 	if (ntok != 1 && ntok != 3)
-		return reply_error(c, r, "%d $jerk takes 0 or 2 arguments, got %u", CONSOLE_E_ARITY,
-				   ntok - 1);
+		return reply_arity(c, r, "$jerk", "0 or 2 arguments", ntok);
 	if (ntok == 3) {
 		if (np_parse_real(argv[1], &jt) != NP_OK || np_parse_real(argv[2], &jr) != NP_OK)
 			return reply_error(c, r, "%d $jerk: not a number", CONSOLE_E_NUMBER);
@@ -459,8 +464,7 @@ static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_
 #endif
 			return true;
 		}
-		return reply_error(c, r, "%d $help takes 0 or 1 argument, got %u", CONSOLE_E_ARITY,
-				   ntok - 1);
+		return reply_arity(c, r, "$help", "0 or 1 argument", ntok);
 	}
 	if (np_streq_nocase(cmd, "$config")) {
 #ifdef VS_NO_CONFIG_EXTRA
@@ -475,8 +479,7 @@ static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_
 		 * off; hands-on bring-up, a lockstep harness). */
 		int64_t ms = 0;
 		if (ntok > 2)
-			return reply_error(c, r, "%d $watchdog takes 0 or 1 argument, got %u",
-					   CONSOLE_E_ARITY, ntok - 1);
+			return reply_arity(c, r, "$watchdog", "0 or 1 argument", ntok);
 		if (ntok == 2 && np_parse_int(argv[1], 0, 60000, &ms) != NP_OK)
 			return reply_error(c, r, "%d $watchdog: %s is not a time in 0..60000 ms",
 					   CONSOLE_E_RANGE, argv[1]);
@@ -489,8 +492,7 @@ static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_
 		return exec_jerk(c, argv, ntok, r);
 	if (np_streq_nocase(cmd, "$version") || np_streq_nocase(cmd, "$diag")) {
 		if (ntok != 1)
-			return reply_error(c, r, "%d %s takes 0 arguments, got %u", CONSOLE_E_ARITY,
-					   cmd, ntok - 1);
+			return reply_arity(c, r, cmd, "0 arguments", ntok);
 		if (np_streq_nocase(cmd, "$version")) {
 			const char *fw = "", *ifv = "";
 
