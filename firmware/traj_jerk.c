@@ -324,11 +324,13 @@ int traj_ln_plan_part(traj_ln_t *p, q32_t len, q32_t cin, q32_t cout, q32_t v, q
 	 * which leaves less than B + 1. */
 	int64_t k = (len - ln_dist(p, lo, 0)) / lo;
 	w = lo;
-	if (len - ln_dist(p, w, k) >= p->na1 + p->nj1 + k + p->na2 + p->nj2 - 2) {
+	int64_t dw = ln_dist(p, w, k); /* D(w, k), kept as w moves */
+	if (len - dw >= p->na1 + p->nj1 + k + p->na2 + p->nj2 - 2) {
 		k++;
 		int64_t top = lo;
 		w = wmin;
-		int64_t over = ln_dist(p, w, k) - len;
+		dw = ln_dist(p, w, k);
+		int64_t over = dw - len;
 		if (over > 0) {
 			/* Even at wmin a tick more covers too much: the hold at lo
 			 * covers the remainder as a bump above lo (an S-curve at
@@ -354,10 +356,11 @@ int traj_ln_plan_part(traj_ln_t *p, q32_t len, q32_t cin, q32_t cout, q32_t v, q
 			 * b2): a step from wmin, then a unit or two either way. */
 			int64_t b2 = p->na1 + p->nj1 + p->na2 + p->nj2 + 2 * k - 2;
 			w = fx_min64(top, w - 2 * over / b2);
-			while (w > wmin && ln_dist(p, w, k) > len)
-				w--;
-			while (w < top && ln_dist(p, w + 1, k) <= len)
-				w++;
+			dw = ln_dist(p, w, k);
+			while (w > wmin && dw > len)
+				dw = ln_dist(p, --w, k);
+			for (int64_t dn; w < top && (dn = ln_dist(p, w + 1, k)) <= len; w++)
+				dw = dn;
 		}
 	}
 	if (w < cout || w > vm || w < 1 ||
@@ -368,7 +371,7 @@ int traj_ln_plan_part(traj_ln_t *p, q32_t len, q32_t cin, q32_t cout, q32_t v, q
 	p->hold = k;
 	p->l1 = p->na1 + p->nj1 - 1;
 	p->n = p->l1 + k + p->na2 + p->nj2 - 1;
-	p->r = p->dsign ? 0 : len - ln_dist(p, w, k); /* a bump or dip takes it all */
+	p->r = p->dsign ? 0 : len - dw; /* a bump or dip takes it all */
 	ramp_start(&p->ramp, fx_abs64(w - cin), p->na1, p->nj1);
 	return 1;
 }

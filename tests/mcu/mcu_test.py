@@ -899,6 +899,13 @@ def c_jerk_moves(b):
     expect(b, "moveContinuousRel 100 0 90", "ok true")
     b.settle(10000)
     expect_pos(b, 900, 300, 90)
+    # Off the heading, from rest (make bench's goal_jerk): the turn's and
+    # the translation's tails, each planned in a tick, under tick_cost's
+    # rule like every tick before it.
+    expect(b, "setPosition 0 0 0", "ok true")
+    expect(b, "moveContinuousRel 300 200 0", "ok true")
+    b.settle(20000)
+    expect_pos(b, 300, 200, 0)
     assert b.ticks()[1] == 0
 
 
