@@ -103,7 +103,8 @@ $(MCU)/vehicle.elf: $(call mcu_objs,$(MCU_BOARD_SRC)) $(MCU)/libproto.a $(MCU)/l
 # mcu_tickcost.sh): the host's scenarios on the same libraries and board code.
 MCU_CFLAGS_tools := $(MCU_BASE)
 MCU_BENCH_SRC := $(addprefix tools/bench/,mcu_tickcost.c scenario.c rig.c) \
-	$(addprefix hal/cortexm/,startup.c systick.c uart.c loop_hal.c small_libc.c udivmod64.c)
+	$(addprefix hal/cortexm/,startup.c systick.c uart.c loop_hal.c small_libc.c udivmod64.c \
+	semihost.c)
 $(MCU)/bench.elf: $(call mcu_objs,$(MCU_BENCH_SRC)) $(MCU)/libfirmware.a hal/cortexm/$(TARGET).ld
 	@$(if $(Q),echo "  LD      $@")
 	$(Q)$(ARM_CC) $(MCU_CPU_$(TARGET)) -Os -flto $(MCU_LTO_LINK) -nostartfiles --specs=nano.specs \
@@ -113,7 +114,8 @@ $(MCU)/bench.elf: $(call mcu_objs,$(MCU_BENCH_SRC)) $(MCU)/libfirmware.a hal/cor
 # The image's 64-bit division on the board (tests/mcu/divcheck.c), against
 # a bitwise one: the objects of the image that carry it, nothing else.
 MCU_CFLAGS_tests := $(MCU_BASE)
-MCU_DIVCHECK_SRC := tests/mcu/divcheck.c $(addprefix hal/cortexm/,startup.c small_libc.c udivmod64.c)
+MCU_DIVCHECK_SRC := tests/mcu/divcheck.c \
+	$(addprefix hal/cortexm/,startup.c systick.c small_libc.c udivmod64.c semihost.c)
 $(MCU)/divcheck.elf: $(call mcu_objs,$(MCU_DIVCHECK_SRC)) hal/cortexm/$(TARGET).ld
 	@$(if $(Q),echo "  LD      $@")
 	$(Q)$(ARM_CC) $(MCU_CPU_$(TARGET)) -Os -flto $(MCU_LTO_LINK) -nostartfiles --specs=nano.specs \

@@ -6,20 +6,8 @@
  * (tests/mcu/mcu_test.py, c_div_check). */
 #include <stdint.h>
 
+/* hal/cortexm/semihost.c: the semihosting exit. */
 void _exit(int code);
-void SysTick_Handler(void);
-
-/* ARM semihosting SYS_EXIT (as tools/bench/mcu_tickcost.c). */
-__attribute__((used)) void _exit(int code)
-{
-	register uint32_t r0 __asm("r0") = 0x18u;
-	// cppcheck-suppress constStatement
-	register uint32_t r1 __asm("r1") = code == 0 ? 0x20026u : 0x20023u;
-	for (;;)
-		__asm volatile("bkpt 0xab" ::"r"(r0), "r"(r1) : "memory");
-}
-
-void SysTick_Handler(void) {}
 
 static uint64_t rng = 0x9e3779b97f4a7c15u;
 

@@ -76,41 +76,28 @@ int _write(int fd, const char *buf, int n)
 	return n;
 }
 
-/* ARM semihosting SYS_EXIT: QEMU (-semihosting) ends with status 0 for
- * ADP_Stopped_ApplicationExit, 1 otherwise. Kept through link-time
- * optimisation: libc's exit calls it from outside the optimised code. */
+/* hal/cortexm/semihost.c: the semihosting exit. */
 void _exit(int code);
-__attribute__((used)) void _exit(int code)
-{
-	register uint32_t r0 __asm("r0") = 0x18u;
-	/* cppcheck cannot see the register variable read by the asm below */
-	// cppcheck-suppress constStatement
-	register uint32_t r1 __asm("r1") = code == 0 ? 0x20026u : 0x20023u;
-	for (;;)
-		__asm volatile("bkpt 0xab" ::"r"(r0), "r"(r1) : "memory");
-}
 
 int main(void)
 {
 	static const bench_hooks_t hooks = {tick, retarget, plan};
-	static const char *const names[] = {
-	    "idle",	"line",	       "cruise",     "jog",	      "retarget",  "line_jerk",
-	    "jog_jerk", "cruise_jerk", "speed_jerk", "retarget_jerk", "goal_jerk", "blend_jerk"};
+	static char names[] = BENCH_SCENARIOS; /* split in place, word by word */
 
 	uart_init();
 	systick_init(1000u);
-	for (unsigned k = 0; k < sizeof(names) / sizeof(names[0]); k++) {
+	for (char *name = strtok(names, " "); name; name = strtok(NULL, " ")) {
 		memset(stats, 0, sizeof(stats));
 		rig_init(&rig);
 		/* The jerk scenarios plan between ticks as the board does; the
 		 * others run no idle planning, and keep the whole pass in the
 		 * request, as the host's table. */
-		if (strstr(names[k], "_jerk"))
+		if (strstr(name, "_jerk"))
 			vehicle_set_plan_budget(&rig.v, BOARD_PLAN_BUDGET);
-		if (bench_scenario(&rig, names[k], &hooks) < 0)
+		if (bench_scenario(&rig, name, &hooks) < 0)
 			_exit(1);
 		for (unsigned i = 0; i < sizeof(stats) / sizeof(stats[0]) && stats[i].label; i++)
-			printf("%s %s %lu %lu %lu %lu\n", names[k], stats[i].label,
+			printf("%s %s %lu %lu %lu %lu\n", name, stats[i].label,
 			       (unsigned long)stats[i].n, (unsigned long)stats[i].sum,
 			       (unsigned long)stats[i].min, (unsigned long)stats[i].max);
 	}

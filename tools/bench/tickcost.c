@@ -72,12 +72,16 @@ int main(int argc, char **argv)
 {
 	static const bench_hooks_t hooks = {tick_dump, retarget_dump, plan_dump};
 	const char *sc = argc > 1 ? argv[1] : "";
+	if (strcmp(sc, "--list") == 0) { /* for tools/bench/tickcost.sh */
+		puts(BENCH_SCENARIOS);
+		return 0;
+	}
 	const char *nd = getenv("BENCH_NODUMP");
 	dump_each = !(nd && strcmp(nd, "1") == 0);
 	rig_init(&rig);
 	long measured = bench_scenario(&rig, sc, &hooks);
 	if (measured < 0) {
-		fprintf(stderr, "usage: tickcost idle|line|cruise|jog|retarget\n");
+		fprintf(stderr, "usage: tickcost --list | SCENARIO, one of: %s\n", BENCH_SCENARIOS);
 		return 2;
 	}
 	printf("%s: %ld measured calls, unit state %d\n", sc, measured,

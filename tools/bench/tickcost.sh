@@ -6,7 +6,8 @@
 #   tools/bench/tickcost.sh BUILD_DIR/bench/tickcost [scenario...]
 set -eu
 prog=$1; shift
-[ $# -gt 0 ] || set -- idle line cruise jog retarget line_jerk jog_jerk cruise_jerk speed_jerk retarget_jerk goal_jerk blend_jerk
+all=$("$prog" --list) # every scenario (BENCH_SCENARIOS, tools/bench/scenario.h)
+[ $# -gt 0 ] || set -- $all
 command -v valgrind >/dev/null || { echo "tickcost: valgrind not installed (tools/deps.sh)"; exit 1; }
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT INT TERM
@@ -29,7 +30,7 @@ for sc in "$@"; do
 			}
 		}' "$tmp/costs" | sort
 done
-if [ "$*" = "idle line cruise jog retarget line_jerk jog_jerk cruise_jerk speed_jerk retarget_jerk goal_jerk blend_jerk" ] || [ "${BENCH_SPLIT:-0}" = 1 ]; then
+if [ "$*" = "$all" ] || [ "${BENCH_SPLIT:-0}" = 1 ]; then
 	find "$tmp" -name "cg.*" -delete
 	BENCH_NODUMP=1 $cg --callgrind-out-file="$tmp/cg.out" "$prog" cruise >"$tmp/log" 2>&1
 	echo "  split of the cruise ticks (inclusive instructions per tick, callees counted in callers):"
