@@ -16,11 +16,38 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+/* A drive's own power state as its last report gave it (CiA 402's state
+ * machine; other drives map onto it). HAL_DRIVE_UNKNOWN: the backend does
+ * not know it (the firmware then goes by .enabled alone). */
+typedef enum {
+	HAL_DRIVE_UNKNOWN = 0,
+	HAL_DRIVE_NOT_READY,	     /* Not ready to switch on */
+	HAL_DRIVE_SWITCH_ON_DISABLED, /* Switch on disabled */
+	HAL_DRIVE_READY,	     /* Ready to switch on */
+	HAL_DRIVE_SWITCHED_ON,	     /* Switched on: power stage off (an STO holds it here) */
+	HAL_DRIVE_ENABLED,	     /* Operation enabled */
+	HAL_DRIVE_QUICK_STOP,	     /* Quick stop active */
+	HAL_DRIVE_FAULT_REACTION,    /* Fault reaction active */
+	HAL_DRIVE_FAULT,	     /* Fault */
+	HAL_DRIVE_NOT_OPERATIONAL,   /* its communication is not operational (NMT) */
+	HAL_DRIVE_STATE_COUNT
+} hal_drive_phase_t;
+
 typedef struct {
 	int32_t position_counts; /* free-running, wraps; compare by difference */
 	uint16_t fault_code;	 /* 0: no fault; otherwise the drive's own code */
-	bool enabled;		 /* power stage actually on (servo on) */
-	bool fresh;		 /* a reply arrived since the previous read */
+	/* Power stage actually on, in the mode the master set (CiA 402:
+	 * Operation enabled and 0x6061 confirmed; Modbus: the status bit). Never
+	 * a copy of the command: the firmware's servo on waits for it. */
+	bool enabled;
+	bool fresh;	     /* a reply arrived since the previous read */
+	uint8_t phase;	     /* hal_drive_phase_t */
+	/* The drive restarted (or its count jumped in a way the backend cannot
+	 * bridge) since the previous read: position_counts no longer continues
+	 * the old count. Reported on one read; the firmware latches it and
+	 * refuses motion until setPosition. A drive that comes back without
+	 * restarting keeps counting and does not set it. */
+	bool position_lost;
 } hal_drive_state_t;
 
 typedef struct {
