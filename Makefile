@@ -54,7 +54,7 @@ PROTO_SRC := $(wildcard proto/*.c proto/client/*.c)
 HOST_SRC := $(wildcard hal/posix/*.c)
 SIM_SRC := $(filter-out %_main.c,$(wildcard host_sim/*.c))
 TEST_SRC := $(wildcard tests/test_*.c)
-TEST_SUPPORT_SRC := $(filter-out tests/test_%,$(wildcard tests/*.c))
+TEST_SUPPORT_SRC := $(filter-out tests/test_%,$(wildcard tests/*.c)) $(wildcard tests/model/*.c)
 
 objs = $(patsubst %.c,$(BUILD)/obj/%.o,$(1))
 

@@ -160,8 +160,19 @@ void motion_stop(motion_t *m)
 	 * they are discarded once the unit is at rest, and commands queued
 	 * meanwhile run after that. */
 	m->stop_drop = m->q_count;
+	if (m->mode != MODE_PATH) {
+		/* Nothing queued is under way (a jog or a goal runs ahead of
+		 * it): it goes now, or it would run once the stop is done. */
+		m->q_count = 0;
+		m->stop_drop = 0;
+		m->pass_todo = 0;
+		m->ln_next = LN_NEXT_NONE;
+		m->face_ok = false;
+	}
 	limits_changed(m);
 	m->stopping = true;
+	/* Spec 5 #33: stop ends in Ready, a pause included. */
+	m->paused = false;
 	m->vtarget = (fx_twist_t){0};
 }
 
@@ -199,6 +210,28 @@ bool motion_has_work(const motion_t *m)
 {
 	/* An enabled joystick at rest is not work: the unit is waiting. */
 	return (m->mode != MODE_IDLE && m->mode != MODE_JOYSTICK) || motion_is_moving(m);
+}
+
+bool motion_host_work(const motion_t *m)
+{
+	if (m->q_count > m->stop_drop)
+		return true;
+	if (m->stopping)
+		return false;
+	switch (m->mode) {
+	case MODE_PATH:
+	case MODE_CONTINUOUS:
+		return true;
+	case MODE_JOG:
+		return m->jog_age_ticks <= m->jog_timeout_ticks && !twist_zero(&m->vtarget);
+	default:
+		return false;
+	}
+}
+
+q32_t motion_speed_cap(const motion_t *m)
+{
+	return vt_eff(m);
 }
 
 bool motion_is_paused(const motion_t *m)

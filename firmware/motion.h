@@ -260,6 +260,18 @@ void motion_tick(motion_t *m, const fx_pose_t *measured, fx_twist_t *out);
 /* Queries. */
 bool motion_is_moving(const motion_t *m); /* velocity not zero */
 bool motion_has_work(const motion_t *m);  /* moving, or anything pending */
+/* Motion a host commanded that is still under way by its command: path
+ * commands queued or running (not those a stop brakes through), a jog
+ * within its timeout with a target, a continuous goal; not a stop, a jog's
+ * own timeout braking, the joystick. What the link watchdog guards. */
+bool motion_host_work(const motion_t *m);
+/* The translation speed in force (set velocity or caution cap), per tick. */
+q32_t motion_speed_cap(const motion_t *m);
+/* The set translation acceleration, per tick^2. */
+static inline q32_t motion_accel_set(const motion_t *m)
+{
+	return m->a_t_pt2;
+}
 bool motion_is_paused(const motion_t *m);
 uint8_t motion_queue_len(const motion_t *m);
 uint8_t motion_mode(const motion_t *m);

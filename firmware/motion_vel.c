@@ -47,10 +47,19 @@ bool motion_continuous_rel(motion_t *m, const fx_pose_t *rel)
 
 void motion_joystick_enable(motion_t *m, bool on)
 {
+	if (on == m->joystick)
+		return;
 	m->joystick = on;
 	if (on) {
-		if (m->mode == MODE_IDLE || m->mode == MODE_JOG || m->mode == MODE_CONTINUOUS)
+		/* The joystick takes over as stop() would: host motion brakes at
+		 * the limit and its queue is dropped; the joystick drives from
+		 * rest (motion_tick hands over once idle). */
+		if (m->mode == MODE_IDLE) {
 			m->mode = MODE_JOYSTICK;
+			m->paused = false;
+		} else {
+			motion_stop(m);
+		}
 		m->vtarget = (fx_twist_t){0};
 	} else if (m->mode == MODE_JOYSTICK) {
 		/* Decelerate at the acceleration limit, then idle. */
@@ -162,10 +171,20 @@ void motion_velocity_tick(motion_t *m, fx_twist_t *out)
 		tgt = (fx_twist_t){0};
 	if (braking)
 		tgt = (fx_twist_t){0};
-	/* Caution cap and set velocity bound the target. */
+	/* Caution cap and set velocity bound the target: the translation as a
+	 * vector (a mecanum diagonal is not faster than the cap). */
 	q32_t vt = vt_eff(m);
 	tgt.vx_pt = fx_clamp64(tgt.vx_pt, -vt, vt);
 	tgt.vy_pt = fx_clamp64(tgt.vy_pt, -vt, vt);
+	if (tgt.vx_pt != 0 && tgt.vy_pt != 0) {
+		q32_t len = fx_hypot(tgt.vx_pt, tgt.vy_pt);
+		if (len > vt) {
+			/* Rounded toward zero: never over the cap. */
+			q32_t k = fx_div(vt, len);
+			tgt.vx_pt = fx_mul(tgt.vx_pt, k);
+			tgt.vy_pt = fx_mul(tgt.vy_pt, k);
+		}
+	}
 	tgt.w_pt = fx_clamp64(tgt.w_pt, -m->v_r_pt, m->v_r_pt);
 	if (m->j_t_pt3 | m->j_r_pt3) {
 		jerk_slew(m, &tgt, at, ar, braking);

@@ -262,6 +262,7 @@ bool vs_getState(vehicle_t *v, int16_t *state, char msg[VS_STATE_MSG_MAX])
 bool vs_pause(vehicle_t *v)
 {
 	motion_pause(&v->motion);
+	v->stick_armed = false;
 	return true;
 }
 
@@ -274,6 +275,7 @@ bool vs_resume(vehicle_t *v)
 bool vs_stop(vehicle_t *v)
 {
 	motion_stop(&v->motion);
+	v->stick_armed = false;
 	return true;
 }
 
@@ -303,6 +305,7 @@ bool vs_setJoystick(vehicle_t *v, bool OnOff)
 	if (OnOff != v->joystick_on)
 		motion_joystick_enable(&v->motion, OnOff);
 	v->joystick_on = OnOff;
+	v->stick_armed = false;
 	return true;
 }
 

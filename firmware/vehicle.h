@@ -172,6 +172,9 @@ struct vehicle {
 	int16_t jog_timeout_ms;
 	/* Unit state. */
 	bool powered, servo, locked, stuck, sensor_lock, joystick_on;
+	/* The stick may drive: it was seen at neutral since the last stop,
+	 * pause, fault, servo off or hand-over (docs/states.md). */
+	bool stick_armed;
 	uint32_t out_shadow[VS_MAX_IO];
 	uint32_t ticks, overruns, last_now_us;
 	uint32_t late_ticks, max_late_us, loop_late_us;

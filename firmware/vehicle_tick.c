@@ -93,16 +93,17 @@ static COLD void link_lost(vehicle_t *v)
 }
 
 /* Link watchdog: motion commanded from a host stops when the host falls
- * silent. The joystick drives locally and a paused unit holds still, so
- * neither needs the host; the stop discards the queue and nothing resumes
- * by itself. */
+ * silent, whatever the joystick flag (a route that runs while the joystick
+ * takes over is still the host's). The joystick's own motion and a paused
+ * unit need no host; the stop discards the queue and nothing resumes by
+ * itself. */
 static void supervise_link(vehicle_t *v)
 {
 	if (v->link_silent_ticks < UINT32_MAX)
 		v->link_silent_ticks++;
 	if (v->link_timeout_ticks == 0 || v->link_silent_ticks < v->link_timeout_ticks)
 		return;
-	if (v->joystick_on || motion_is_paused(&v->motion) || !motion_has_work(&v->motion))
+	if (motion_is_paused(&v->motion) || !motion_host_work(&v->motion))
 		return;
 	v->link_silent_ticks = 0;
 	link_lost(v);
@@ -278,11 +279,22 @@ static void feed_joystick(vehicle_t *v)
 		return;
 	}
 	int16_t x = 0, y = 0, r = 0;
-	if (v->servo && !v->locked && !v->stuck) {
+	/* The stick drives only from neutral: after a stop, a pause, a fault,
+	 * the servo off or the hand-over, a stick still held over does not
+	 * drive the unit off again (it must come back first). */
+	bool can = v->servo && !v->locked && !v->stuck && !motion_is_paused(&v->motion) &&
+		   motion_mode(&v->motion) == MODE_JOYSTICK;
+	if (can) {
 		x = deadband(js.axis[0], v->joystick_deadband_q15);
 		y = vs_config_omni(&v->cfg) ? deadband(js.axis[1], v->joystick_deadband_q15) : 0;
 		r = deadband(js.axis[2], v->joystick_deadband_q15);
+		if ((x | y | r) == 0)
+			v->stick_armed = true;
+	} else {
+		v->stick_armed = false;
 	}
+	if (!v->stick_armed)
+		x = y = r = 0;
 	motion_joystick_input(&v->motion, x, y, r, true);
 }
 
@@ -370,6 +382,31 @@ static void supervise_position(vehicle_t *v, int64_t ferr, const fx_twist_t *mov
 	}
 }
 
+/* The position hold is motion too. A wheel pushed more than a millimetre
+ * off its reference is brought back as a move, not as a step to the loop
+ * gain times the error: its setpoint stays within the speed in force (set
+ * velocity, caution cap) and what it can brake from within the error, and
+ * its magnitude rises by at most the set acceleration a tick. Settling
+ * after a move (errors well under a millimetre) is left as it is. */
+static void bound_hold(vehicle_t *v, const int32_t prev[])
+{
+	int64_t hz = v->cfg.tick_hz;
+	q32_t cpm = v->kin.p.counts_per_mm;
+	int64_t far = cpm; /* 1 mm in counts, Q32 */
+	for (uint8_t i = 0; i < v->naxes; i++) {
+		int64_t err = fx_abs64(v->kin.ref_counts_q32[i]);
+		if (err <= far)
+			continue;
+		q32_t a_pt2 = fx_mul(motion_accel_set(&v->motion), cpm); /* counts/tick^2 */
+		int64_t step = fx_max64((a_pt2 * hz) >> 24, 1);
+		int64_t cap = (fx_mul(motion_speed_cap(&v->motion), cpm) * hz) >> 24;
+		int64_t b = fx_min64(cap, (traj_umax(err, a_pt2) * hz) >> 24);
+		int64_t p = prev[i] < 0 ? -(int64_t)prev[i] : prev[i];
+		b = fx_min64(b, p + step);
+		v->wheel_cps_q8[i] = (int32_t)fx_clamp64(v->wheel_cps_q8[i], -b, b);
+	}
+}
+
 bool vehicle_in_position(const vehicle_t *v)
 {
 	return !v->servo || v->inpos_ticks >= v->window_ticks ||
@@ -398,7 +435,12 @@ void vehicle_tick(vehicle_t *v, uint32_t now_us)
 
 	fx_twist_t delta;
 	int64_t ferr;
+	int32_t prev[VS_MAX_AXES];
+	for (uint8_t i = 0; i < v->naxes; i++)
+		prev[i] = v->wheel_cps_q8[i];
 	kin_step(&v->kin, &cmd, v->meas_counts, v->wheel_cps_q8, &delta, &ferr);
+	if (v->servo && (cmd.vx_pt | cmd.vy_pt | cmd.w_pt) == 0)
+		bound_hold(v, prev);
 	odom_integrate(&v->odom, &delta, &v->odom_trig);
 
 	if (v->servo && ferr > v->following_err_max_q32)

@@ -22,7 +22,8 @@ FUZZ_CFLAGS := -std=c11 -g -O1 -I. -D_GNU_SOURCE -MMD -MP $(FUZZ_SAN) -fsanitize
 	-Wall -Wextra
 # hal/linux/backend_cfg.c: the <backends> section's handler, read by the same
 # reader as the rest of the vehicle file (fuzz_config).
-FUZZ_SUT_SRC := $(FW_SRC) $(PROTO_SRC) $(HOST_SRC) $(SIM_SRC) hal/linux/backend_cfg.c
+FUZZ_SUT_SRC := $(FW_SRC) $(PROTO_SRC) $(HOST_SRC) $(SIM_SRC) hal/linux/backend_cfg.c \
+	$(wildcard tests/model/*.c)
 FUZZ_EVDEV := -I/usr/include/libevdev-1.0
 FUZZ_ALL := $(patsubst tests/fuzz/%.c,%,$(wildcard tests/fuzz/fuzz_*.c))
 FUZZ_TARGETS ?= $(FUZZ_ALL)

@@ -822,6 +822,7 @@ static void test_joystick_lost(void **state)
 	(void)state;
 	ready();
 	EXPECT("setJoystick true", "ok true");
+	sim_run_ms(&S, 1); /* the stick at neutral arms it */
 	EXPECT("$sim joystick 1 0 0", "ok joystick 32767 0 0");
 	sim_run_ms(&S, 1500);
 	/* full stick: the set velocity */
@@ -837,6 +838,11 @@ static void test_joystick_lost(void **state)
 	stays_put(1000);
 	EXPECT("clearAlarm", "ok true");
 	EXPECT("setJoystick true", "ok true");
+	/* held over at the hand-over: nothing until it comes back to neutral */
+	stays_put(500);
+	EXPECT("$sim joystick 0 0 0", "ok joystick 0 0 0");
+	sim_run_ms(&S, 1);
+	EXPECT("$sim joystick 0.5 0 0", "ok joystick 16384 0 0");
 	sim_run_ms(&S, 500);
 	assert_true(cmd_mm_s() > 100.0);
 }

@@ -1042,10 +1042,11 @@ static void test_following_error(void **state)
 	assert_true(F.cmd_cps_q8[0] < 0);
 	fake_run(&F, &V, 2000);
 	assert_int_equal(alarm_count(), 0);
-	/* 1800 counts beyond the reference is a fault. */
+	/* 1800 counts beyond the reference is a fault (the hold left the
+	 * wheel a fraction of a count past its reference: 1799 and a bit). */
 	F.counts[1] -= 1800;
 	fake_run(&F, &V, 1);
-	expect_fault(204, "following error 1800 counts");
+	expect_fault(204, "following error 1799 counts");
 	expect_servo_off();
 	expect_state(VS_STATE_ALARM, "Alarm-204");
 }
@@ -1057,7 +1058,10 @@ static void test_encoder_stuck(void **state)
 	/* The loop commands the wheel back; its encoder does not move. */
 	F.frozen[0] = true;
 	F.counts[0] += 1500;
-	fake_run(&F, &V, 300);
+	/* The hold ramps the setpoint at the set acceleration (docs/states.md):
+	 * it passes the stuck threshold on its fourth tick, so the fault
+	 * comes encoder_stuck_ms after that. */
+	fake_run(&F, &V, 302);
 	assert_int_equal(alarm_count(), 0);
 	assert_true(F.cmd_cps_q8[0] < 0);
 	fake_run(&F, &V, 2);

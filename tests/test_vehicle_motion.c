@@ -388,6 +388,13 @@ static void test_joystick_drives(void **state)
 {
 	(void)state;
 	assert_true(vs_setJoystick(&V, true));
+	/* A stick held over at the hand-over drives nothing... */
+	F.js.axis[0] = 32767;
+	fake_run(&F, &V, 500);
+	assert_true(wheels_still());
+	/* ...until it has been seen at neutral. */
+	F.js.axis[0] = 0;
+	fake_run(&F, &V, 1);
 	F.js.axis[0] = 32767;
 	fake_run(&F, &V, 500);
 	assert_true(F.cmd_cps_q8[0] > 0 && F.cmd_cps_q8[1] > 0);
