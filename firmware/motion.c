@@ -155,6 +155,12 @@ void motion_resume(motion_t *m)
 
 void motion_stop(motion_t *m)
 {
+	/* Nothing moving and nothing queued: nothing to stop (a jog or goal
+	 * sent next is not refused for a stop still "braking"). */
+	if (m->mode == MODE_IDLE && m->q_count == 0 && !motion_is_moving(m)) {
+		m->paused = false;
+		return;
+	}
 	/* Path motion brakes along the path it is on, which may run on into
 	 * the queued commands (a cruise line ends at speed in its corner):
 	 * they are discarded once the unit is at rest, and commands queued

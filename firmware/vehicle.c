@@ -100,7 +100,7 @@ bool vehicle_motion_refused(vehicle_t *v, const char *op, bool velocity_mode)
 {
 	uint8_t mode = motion_mode(&v->motion);
 	if (velocity_mode) {
-		if (mode == MODE_PATH || motion_queue_len(&v->motion) > 0)
+		if (mode == MODE_PATH || motion_queue_len(&v->motion) > 0 || v->motion.stopping)
 			return vehicle_refuse(v, op, ALM_W_MOVING);
 		return vehicle_refuse(v, op, ALM_W_KINEMATICS);
 	}
@@ -354,8 +354,11 @@ bool vs_setServo(vehicle_t *v, bool OnOff)
 		return true;
 	if (fault_active(v))
 		return vehicle_refuse(v, "setServo", ALM_W_FAULT_ACTIVE);
-	/* Wheel references start at the measured counts: no jump. */
+	/* Wheel references start at the measured counts: no jump, and in
+	 * position (nothing to settle). */
 	kin_sync(&v->kin, v->meas_counts);
+	v->inpos_ticks = v->window_ticks;
+	v->settle_ticks = 0;
 	for (uint8_t i = 0; i < v->naxes; i++) {
 		v->hal.ops->drive_enable(v->hal.ctx, i, true);
 		v->drive[i].enabled = true;

@@ -347,6 +347,9 @@ static void hold_pose(vehicle_t *v)
 
 /* In position (CiA 402's position window and window time): the reference
  * at rest and every wheel within the window of it for the window time.
+ * Once there, the motion is done until the next one: a wheel the hold
+ * brings back into the window afterwards (a push, a creep) does not make
+ * the unit Busy again, so a host that saw Ready is not refused.
  * Until then the motion is not done: the unit stays Busy, and Paused,
  * Locked and Stuck wait for it too. A unit that does not get there within
  * settle_timeout_ms raises warning 154 once and is taken as done (it holds
@@ -374,7 +377,7 @@ static void supervise_position(vehicle_t *v, int64_t ferr, const fx_twist_t *mov
 		v->settle_ticks = 0;
 		if (v->inpos_ticks < v->window_ticks)
 			v->inpos_ticks++;
-	} else {
+	} else if (v->inpos_ticks < v->window_ticks) {
 		v->inpos_ticks = 0;
 		if (v->settle_ticks <= v->settle_timeout_ticks &&
 		    ++v->settle_ticks > v->settle_timeout_ticks)
