@@ -39,12 +39,14 @@ enum {
 	ALM_W_PAUSED = 129,	     /* jog refused while paused */
 	ALM_W_STUCK = 130,	     /* motion refused: obstacle present */
 	ALM_W_JOYSTICK = 131,	     /* motion refused: joystick in use */
+	ALM_W_POSE_LOST = 132,	     /* motion refused: a drive lost its position */
 	ALM_W_BATTERY_LOW = 140,     /* battery below the low threshold */
 	ALM_W_CONTACT = 150,	     /* contact sensor tripped: unit Locked */
 	ALM_W_OBSTACLE = 151,	     /* obstacle input tripped: unit Stuck */
 	ALM_W_JOYSTICK_LOST = 152,   /* joystick lost while in use: stopped */
 	ALM_W_LINK_LOST = 153,	     /* no request within link_timeout_ms: stopped */
 	ALM_W_NOT_IN_POSITION = 154, /* not settled settle_timeout_ms after the reference */
+	ALM_W_DRIVE_RESTARTED = 155, /* a drive restarted: its count starts over */
 };
 
 /* Fault codes. */
@@ -57,8 +59,10 @@ enum {
 	ALM_F_POWER_LOST = 206,	   /* main power dropped while on */
 	ALM_F_BATTERY_CRITICAL = 207,
 	ALM_F_ESTOP = 208,
-	ALM_F_OVERRUN = 209,	/* the loop's own work took longer than a period */
-	ALM_F_LOOP_STALL = 210, /* a tick came later than loop_late_ms */
+	ALM_F_OVERRUN = 209,	       /* the loop's own work took longer than a period */
+	ALM_F_LOOP_STALL = 210,	       /* a tick came later than loop_late_ms */
+	ALM_F_DRIVE_NOT_ENABLED = 211, /* servo on: a drive did not reach Operation enabled */
+	ALM_F_DRIVE_DISABLED = 212,    /* an enabled drive left Operation enabled */
 };
 
 typedef struct {

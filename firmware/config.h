@@ -62,6 +62,7 @@ typedef struct {
 	vs_real_t following_error_mm; /* measured vs commanded wheel travel */
 	uint32_t encoder_stuck_ms;    /* commanded motion with no encoder change */
 	uint32_t drive_timeout_ms;    /* drive replies missing this long: fault */
+	uint32_t servo_on_timeout_ms; /* servo on: every drive enabled within this, else fault */
 	/* A tick later than its period by more than this: the loop stalled
 	 * (fault 210). Lateness below it is counted, not a fault. */
 	uint32_t loop_late_ms;

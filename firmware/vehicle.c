@@ -46,6 +46,8 @@ static const char *refusal_reason(uint32_t code)
 		return "unit stuck";
 	case ALM_W_JOYSTICK:
 		return "joystick in use";
+	case ALM_W_POSE_LOST:
+		return "position lost";
 	default:
 		return "refused";
 	}
@@ -87,6 +89,8 @@ bool vehicle_move_gate(vehicle_t *v, const char *op, vehicle_gate_t gate)
 		return vehicle_refuse(v, op, ALM_W_SERVO_OFF);
 	if (v->joystick_on)
 		return vehicle_refuse(v, op, ALM_W_JOYSTICK);
+	if (v->pose_lost)
+		return vehicle_refuse(v, op, ALM_W_POSE_LOST);
 	if (gate == VEHICLE_GATE_READY && (motion_is_paused(&v->motion) ||
 					   motion_has_work(&v->motion) || !vehicle_in_position(v)))
 		return vehicle_refuse(v, op, ALM_W_NOT_READY);
@@ -224,7 +228,7 @@ bool vs_getState(vehicle_t *v, int16_t *state, char msg[VS_STATE_MSG_MAX])
 	/* Braking for a lock, an obstacle or a pause, or settling, the unit is
 	 * Busy: the state that follows is reported once the wheels are in
 	 * place. */
-	bool settled = vehicle_in_position(v);
+	bool settled = v->servo_wait || vehicle_in_position(v);
 	int16_t code;
 	if (fault) {
 		code = VS_STATE_ALARM;
@@ -244,7 +248,7 @@ bool vs_getState(vehicle_t *v, int16_t *state, char msg[VS_STATE_MSG_MAX])
 	} else if (settled && motion_is_paused(&v->motion)) {
 		code = VS_STATE_PAUSED;
 		state_msg(v->state_msg, "Paused", NULL);
-	} else if (!settled || motion_has_work(&v->motion)) {
+	} else if (!settled || v->servo_wait || motion_has_work(&v->motion)) {
 		code = VS_STATE_BUSY;
 		state_msg(v->state_msg, "Busy", NULL);
 	} else if (warn) {
@@ -354,17 +358,25 @@ bool vs_setServo(vehicle_t *v, bool OnOff)
 		return true;
 	if (fault_active(v))
 		return vehicle_refuse(v, "setServo", ALM_W_FAULT_ACTIVE);
+	for (uint8_t i = 0; i < v->naxes; i++) {
+		v->hal.ops->drive_enable(v->hal.ctx, i, true);
+		v->encoder_still_ticks[i] = 0;
+	}
+	/* The drives' own word on it (a drive that enables at once, as the
+	 * simulated one does, completes servo on here). */
+	vehicle_sample_drives(v);
+	if (alarm_any_fault(&v->alarms))
+		return false;
 	/* Wheel references start at the measured counts: no jump, and in
 	 * position (nothing to settle). */
 	kin_sync(&v->kin, v->meas_counts);
 	v->inpos_ticks = v->window_ticks;
 	v->settle_ticks = 0;
-	for (uint8_t i = 0; i < v->naxes; i++) {
-		v->hal.ops->drive_enable(v->hal.ctx, i, true);
-		v->drive[i].enabled = true;
-		v->encoder_still_ticks[i] = 0;
-	}
 	v->servo = true;
+	v->servo_wait = false;
+	v->servo_wait_ticks = 0;
+	for (uint8_t i = 0; i < v->naxes; i++)
+		v->servo_wait |= !v->drive[i].enabled;
 	return true;
 }
 

@@ -175,6 +175,11 @@ struct vehicle {
 	/* The stick may drive: it was seen at neutral since the last stop,
 	 * pause, fault, servo off or hand-over (docs/states.md). */
 	bool stick_armed;
+	/* Servo on waits for every drive to report enabled (servo_wait, for
+	 * servo_wait_ticks so far); a drive that restarted lost its count:
+	 * motion is refused until setPosition (pose_lost). */
+	bool servo_wait, pose_lost;
+	uint32_t servo_wait_ticks, servo_on_timeout_ticks;
 	uint32_t out_shadow[VS_MAX_IO];
 	uint32_t ticks, overruns, last_now_us;
 	uint32_t late_ticks, max_late_us, loop_late_us;

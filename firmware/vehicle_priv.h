@@ -20,6 +20,8 @@ size_t vehicle_put_volts(char *b, size_t cap, size_t pos, uint32_t mv);
 void vehicle_axis_text(char *s, size_t cap, const char *what, uint8_t axis, const char *tail);
 
 void vehicle_servo_off(vehicle_t *v);
+/* Read every drive once (vehicle_tick.c): what the tick does first. */
+void vehicle_sample_drives(vehicle_t *v);
 void vehicle_raise_fault(vehicle_t *v, uint32_t code, const char *text);
 void vehicle_raise_fault_level(vehicle_t *v, uint32_t code, const char *text);
 

@@ -148,7 +148,76 @@ static COLD void drive_fault_report(vehicle_t *v, uint8_t i, uint16_t fc)
 	vehicle_raise_fault(v, ALM_F_DRIVE, s);
 }
 
-static void sample_drives(vehicle_t *v)
+/* The drive's own state, in the drive's words (CiA 402 names). */
+static const char *phase_name(uint8_t ph)
+{
+	static const char *const names[HAL_DRIVE_STATE_COUNT] = {"",
+								 "Not ready to switch on",
+								 "Switch on disabled",
+								 "Ready to switch on",
+								 "Switched on",
+								 "Operation enabled",
+								 "Quick stop active",
+								 "Fault reaction active",
+								 "Fault",
+								 "not operational"};
+	return ph < HAL_DRIVE_STATE_COUNT ? names[ph] : "";
+}
+
+/* "drive <axis> <what>: <state>" (no state when the backend does not know
+ * it). */
+static COLD void drive_state_fault(vehicle_t *v, uint32_t code, uint8_t i, const char *what)
+{
+	char s[VS_ALARM_SOURCE_MAX];
+	size_t pos = vehicle_put_str(s, sizeof s, 0, "drive ");
+	pos = vehicle_put_dec(s, sizeof s, pos, i, 1);
+	pos = vehicle_put_str(s, sizeof s, pos, what);
+	const char *ph = phase_name(v->drive[i].phase);
+	if (*ph) {
+		pos = vehicle_put_str(s, sizeof s, pos, ": ");
+		vehicle_put_str(s, sizeof s, pos, ph);
+	}
+	vehicle_raise_fault(v, code, s);
+}
+
+/* A drive restarted: its count starts over. The odometry does not take the
+ * jump, the wheel loop starts from the new counts, the motion stops, and
+ * motion is refused until setPosition says where the unit is. */
+static COLD void drive_restarted(vehicle_t *v, uint8_t i)
+{
+	char s[VS_ALARM_SOURCE_MAX];
+	vehicle_axis_text(s, sizeof s, "drive ", i, " position lost: setPosition required");
+	motion_stop(&v->motion);
+	v->pose_lost = true;
+	alarm_raise(&v->alarms, ALM_W_DRIVE_RESTARTED, s);
+}
+
+/* Servo on is complete when every drive reports enabled: until then the
+ * setpoints are zero and the motion waits; past servo_on_timeout_ms it is a
+ * fault naming the first drive not enabled and its state. Once on, a drive
+ * that leaves Operation enabled by itself (an STO, a drive's own stop) is a
+ * fault too: the other wheels must not drive on alone. */
+static void supervise_enable(vehicle_t *v)
+{
+	uint8_t off = VS_MAX_AXES;
+	for (uint8_t i = 0; i < v->naxes && off == VS_MAX_AXES; i++)
+		if (!v->drive[i].enabled)
+			off = i;
+	if (v->servo_wait) {
+		if (off == VS_MAX_AXES) {
+			v->servo_wait = false;
+			/* The wheel references start at the counts of this moment. */
+			kin_sync(&v->kin, v->meas_counts);
+			v->inpos_ticks = v->window_ticks;
+		} else if (++v->servo_wait_ticks > v->servo_on_timeout_ticks) {
+			drive_state_fault(v, ALM_F_DRIVE_NOT_ENABLED, off, " not enabled");
+		}
+	} else if (off != VS_MAX_AXES && v->drive[off].fault_code == 0) {
+		drive_state_fault(v, ALM_F_DRIVE_DISABLED, off, " left Operation enabled");
+	}
+}
+
+void vehicle_sample_drives(vehicle_t *v)
 {
 	/* Each drive's condition is reported once per occurrence (and again
 	 * after clearAlarm while it persists), so two faulted drives do not
@@ -170,6 +239,10 @@ static void sample_drives(vehicle_t *v)
 		v->drive[i] = st;
 		supervise_encoder(v, i, st.position_counts != v->meas_counts[i]);
 		v->meas_counts[i] = st.position_counts;
+		if (st.position_lost) {
+			v->kin.last_meas[i] = st.position_counts;
+			drive_restarted(v, i);
+		}
 		uint16_t fc = v->powered ? st.fault_code : 0;
 		if (fc != 0 && fc != v->drive_fault_reported[i])
 			drive_fault_report(v, i, fc);
@@ -412,6 +485,8 @@ static void bound_hold(vehicle_t *v, const int32_t prev[])
 
 bool vehicle_in_position(const vehicle_t *v)
 {
+	if (v->servo_wait)
+		return false;
 	return !v->servo || v->inpos_ticks >= v->window_ticks ||
 	       v->settle_ticks > v->settle_timeout_ticks;
 }
@@ -419,8 +494,12 @@ bool vehicle_in_position(const vehicle_t *v)
 void vehicle_tick(vehicle_t *v, uint32_t now_us)
 {
 	check_lateness(v, now_us);
-	sample_drives(v);
+	vehicle_sample_drives(v);
 	supervise_inputs(v);
+	/* After the inputs: a relay that opened is a power fault, not a drive
+	 * that left Operation enabled. */
+	if (v->servo)
+		supervise_enable(v);
 	supervise_link(v);
 	feed_joystick(v);
 
@@ -428,8 +507,12 @@ void vehicle_tick(vehicle_t *v, uint32_t now_us)
 	/* At rest the reference stays where the motion ended and the wheel
 	 * loop holds the unit there: one owner of where the unit is. Only with
 	 * the servo off (wheels free) does it follow the odometry. */
-	motion_tick(&v->motion, v->servo ? NULL : &v->odom, &cmd);
-	if (!v->servo) {
+	/* While the servo comes on the motion waits (nothing to drive yet). */
+	if (v->servo && v->servo_wait)
+		cmd = (fx_twist_t){0, 0, 0};
+	else
+		motion_tick(&v->motion, v->servo ? NULL : &v->odom, &cmd);
+	if (!v->servo || v->servo_wait) {
 		/* Nothing may move with the servo off; the odometry still
 		 * follows wheels pushed by hand. */
 		cmd = (fx_twist_t){0, 0, 0};
@@ -450,7 +533,7 @@ void vehicle_tick(vehicle_t *v, uint32_t now_us)
 		following_fault(v, ferr);
 	supervise_position(v, ferr, &delta);
 
-	if (!v->servo)
+	if (!v->servo || v->servo_wait)
 		for (uint8_t i = 0; i < v->naxes; i++)
 			v->wheel_cps_q8[i] = 0;
 	for (uint8_t i = 0; i < v->naxes; i++)

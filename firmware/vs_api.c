@@ -167,6 +167,7 @@ static void init_supervision(vehicle_t *v, const vs_config_t *cfg, vs_real_t cou
 {
 	v->period_us = 1000000u / cfg->tick_hz;
 	v->drive_timeout_ticks = ms_to_ticks(cfg->drive_timeout_ms, cfg->tick_hz);
+	v->servo_on_timeout_ticks = ms_to_ticks(cfg->servo_on_timeout_ms, cfg->tick_hz);
 	v->loop_late_us = cfg->loop_late_ms * 1000u;
 	vehicle_set_link_timeout(v, cfg->link_timeout_ms);
 	v->encoder_stuck_ticks = ms_to_ticks(cfg->encoder_stuck_ms, cfg->tick_hz);
@@ -326,6 +327,7 @@ bool vs_setPosition(vehicle_t *v, vs_position_t pos)
 	fx_pose_t p = pose_q32(&pos);
 	p.th_deg = fx_wrap_deg(p.th_deg);
 	v->odom = p;
+	v->pose_lost = false; /* the host says where the unit is */
 	/* At rest the new pose is where the unit is now: the wheel loop drops
 	 * what it still had to correct, so that the reference, the odometry
 	 * and the wheels agree (a move sent next starts from p exactly). */

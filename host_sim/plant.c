@@ -97,7 +97,7 @@ bool plant_drive_enabled(const plant_t *pl, uint8_t axis)
 	if (axis >= pl->n)
 		return false;
 	const plant_wheel_t *w = &pl->w[axis];
-	return w->enable_cmd && pl->relay_closed && w->fault_latched == 0;
+	return w->enable_cmd && pl->relay_closed && w->fault_latched == 0 && !w->hold;
 }
 
 /* One wheel over dt: returns the travel in counts. */
@@ -193,6 +193,26 @@ void plant_drive_set_velocity(plant_t *pl, uint8_t axis, int32_t cps_q8)
 		pl->w[axis].setpoint_q8 = cps_q8;
 }
 
+bool plant_drive_hold(plant_t *pl, uint8_t axis, bool on)
+{
+	if (axis >= pl->n)
+		return false;
+	pl->w[axis].hold = on;
+	return true;
+}
+
+bool plant_drive_reboot(plant_t *pl, uint8_t axis)
+{
+	if (axis >= pl->n)
+		return false;
+	plant_wheel_t *w = &pl->w[axis];
+	w->enable_cmd = false;
+	w->fault_latched = 0;
+	w->count_offset = -floor(w->pos_counts);
+	w->restarted = true;
+	return true;
+}
+
 void plant_drive_enable(plant_t *pl, uint8_t axis, bool on)
 {
 	if (axis < pl->n)
@@ -217,10 +237,21 @@ void plant_drive_read(plant_t *pl, uint8_t axis, hal_drive_state_t *st)
 		st->fresh = false;
 		return;
 	}
-	st->position_counts = w->stuck ? w->stuck_counts : encoder_counts(w->pos_counts);
+	st->position_counts =
+	    w->stuck ? w->stuck_counts : encoder_counts(w->pos_counts + w->count_offset);
 	st->fault_code = w->fault_latched;
 	st->enabled = plant_drive_enabled(pl, axis);
 	st->fresh = true;
+	st->position_lost = w->restarted;
+	w->restarted = false;
+	if (!pl->relay_closed)
+		st->phase = HAL_DRIVE_NOT_READY;
+	else if (w->fault_latched)
+		st->phase = HAL_DRIVE_FAULT;
+	else if (st->enabled)
+		st->phase = HAL_DRIVE_ENABLED;
+	else
+		st->phase = w->enable_cmd ? HAL_DRIVE_SWITCHED_ON : HAL_DRIVE_READY;
 	w->last = *st;
 }
 
@@ -353,7 +384,7 @@ bool plant_drive_stuck(plant_t *pl, uint8_t axis, bool on)
 		return false;
 	plant_wheel_t *w = &pl->w[axis];
 	if (on && !w->stuck)
-		w->stuck_counts = encoder_counts(w->pos_counts);
+		w->stuck_counts = encoder_counts(w->pos_counts + w->count_offset);
 	w->stuck = on;
 	return true;
 }

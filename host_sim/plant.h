@@ -73,7 +73,10 @@ typedef struct {
 	uint16_t fault_latched; /* what the drive reports until reset */
 	bool stuck;		/* encoder frozen at stuck_counts */
 	int32_t stuck_counts;
-	bool silent; /* replies lost: drive_read repeats `last` */
+	bool silent;	     /* replies lost: drive_read repeats `last` */
+	bool hold;	     /* power stage held off (an STO): stays in Switched on */
+	bool restarted;	     /* rebooted since the last read: its count starts over */
+	double count_offset; /* what a reboot took off the count */
 	hal_drive_state_t last;
 } plant_wheel_t;
 
@@ -129,6 +132,12 @@ void plant_set_relay_mode(plant_t *pl, plant_relay_mode_t mode);
 bool plant_drive_fault(plant_t *pl, uint8_t axis, uint16_t code);
 bool plant_drive_stuck(plant_t *pl, uint8_t axis, bool on);
 bool plant_drive_silent(plant_t *pl, uint8_t axis, bool on);
+/* The power stage held off (as a safe torque off does): the drive stays in
+ * Switched on whatever the master asks. */
+bool plant_drive_hold(plant_t *pl, uint8_t axis, bool on);
+/* The drive reboots: it forgets the enable, and its count starts at 0
+ * (reported as a lost position on the next read). */
+bool plant_drive_reboot(plant_t *pl, uint8_t axis);
 /* Clears fault condition, stuck and silent; a latched fault stays until
  * drive_reset_fault, as on a real drive. */
 bool plant_drive_ok(plant_t *pl, uint8_t axis);

@@ -160,7 +160,7 @@ static bool cmd_drive(sim_t *s, int argc, char **argv, char *reply, size_t cap)
 	plant_t *pl = &s->plant;
 	unsigned long axis, code;
 	if (argc < 4 || !parse_uint(argv[2], 255, &axis))
-		return ERR("usage: $sim drive AXIS fault CODE|ok|stuck|silent");
+		return ERR("usage: $sim drive AXIS fault CODE|ok|stuck|silent|hold|reboot");
 	if (axis >= pl->n)
 		return ERR("no axis %lu (0..%u)", axis, pl->n - 1u);
 	uint8_t a = (uint8_t)axis;
@@ -172,15 +172,20 @@ static bool cmd_drive(sim_t *s, int argc, char **argv, char *reply, size_t cap)
 		return reply_f(reply, cap, "ok drive %u fault 0x%04lx", a, code);
 	}
 	if (argc != 4)
-		return ERR("usage: $sim drive AXIS fault CODE|ok|stuck|silent");
-	if (!strcmp(what, "ok"))
+		return ERR("usage: $sim drive AXIS fault CODE|ok|stuck|silent|hold|reboot");
+	if (!strcmp(what, "ok")) {
 		plant_drive_ok(pl, a);
+		plant_drive_hold(pl, a, false);
+	} else if (!strcmp(what, "hold"))
+		plant_drive_hold(pl, a, true);
+	else if (!strcmp(what, "reboot"))
+		plant_drive_reboot(pl, a);
 	else if (!strcmp(what, "stuck"))
 		plant_drive_stuck(pl, a, true);
 	else if (!strcmp(what, "silent"))
 		plant_drive_silent(pl, a, true);
 	else
-		return ERR("usage: $sim drive AXIS fault CODE|ok|stuck|silent");
+		return ERR("usage: $sim drive AXIS fault CODE|ok|stuck|silent|hold|reboot");
 	return reply_f(reply, cap, "ok drive %u %s", a, what);
 }
 

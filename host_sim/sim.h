@@ -13,7 +13,10 @@
  *   $sim joystick X Y R            axes as fractions of full scale, -1..1
  *   $sim joystick lost
  *   $sim relay fail|ok|drop        fail: next close fails; drop: opens now
- *   $sim drive AXIS fault CODE|ok|stuck|silent   AXIS 0-based; ok clears all
+ *   $sim drive AXIS fault CODE|ok|stuck|silent|hold|reboot   AXIS 0-based;
+ *                                  hold: its power stage held off (Switched
+ *                                  on, as an STO); reboot: it restarts, its
+ *                                  count from 0; ok clears all
  *   $sim battery MV                open-circuit voltage, mV
  *   $sim input ID VALUE            set an input's value
  *   $sim wire OUT IN|none          loop an output back to an input

@@ -9,7 +9,12 @@
  *      back to neutral;
  *   4. the position hold is bounded by the set velocity and acceleration;
  *   5. a mecanum base's jog and joystick speed is a vector bound;
- *   6. stop ends a pause: Ready.
+ *   6. stop ends a pause: Ready;
+ *  11. servo on completes only when every drive reports enabled, else a
+ *      fault naming the drive and its state; a drive leaving Operation
+ *      enabled stops the unit; no wheel drives alone;
+ *  12. a drive that restarted: the odometry keeps its pose, motion is
+ *      refused until setPosition.
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -259,6 +264,87 @@ static void test_stop_ends_pause(void **state)
 	EXPECT("getState", "ok true 16 \"Ready\"");
 }
 
+/* 11: drive 0's power stage held off (an STO): servo on waits, the other
+ * wheel never drives, and 500 ms on it is fault 211 naming drive 0 and its
+ * state. */
+static void test_servo_on_waits_for_every_drive(void **state)
+{
+	(void)state;
+	EXPECT("setPower true", "ok true");
+	EXPECT("$sim drive 0 hold", "ok drive 0 hold");
+	EXPECT("setServo true", "ok true");
+	EXPECT("getState", "ok true 17 \"Busy\"");
+	EXPECT("getServoStatus 0", "ok true false");
+	EXPECT("getServoStatus 1", "ok true true");
+	EXPECT("moveForward 100", "ok false");
+	EXPECT("getActiveAlarm 1",
+	       "ok true 1 1 120 warning \"moveForward refused: unit not ready\"");
+	EXPECT("moveLinearAbs 100 0 0", "ok true"); /* queued: it waits */
+	for (int t = 0; t < 500; t++) {
+		sim_tick(&S);
+		assert_int_equal(S.vehicle.wheel_cps_q8[0], 0);
+		assert_int_equal(S.vehicle.wheel_cps_q8[1], 0);
+	}
+	EXPECT("getState", "ok true 17 \"Busy\"");
+	sim_tick(&S); /* the 501st tick: past servo_on_timeout_ms */
+	EXPECT("getActiveAlarm 1", "ok true 2 1 211 fault \"drive 0 not enabled: Switched on\"");
+	EXPECT("getState", "ok true 19 \"Alarm-211\"");
+	EXPECT("$sim pose", "ok pose 0.000 0.000 0.000");
+	/* Released: servo on completes at once, the queue went with the fault. */
+	EXPECT("$sim drive 0 ok", "ok drive 0 ok");
+	EXPECT("clearAlarm", "ok true");
+	EXPECT("setServo true", "ok true");
+	EXPECT("getState", "ok true 16 \"Ready\"");
+	EXPECT("getServoStatus 0", "ok true true");
+}
+
+/* 11: a drive that leaves Operation enabled while the unit moves: fault 212
+ * in that tick, both wheels get zero. */
+static void test_drive_leaving_enabled_stops_all(void **state)
+{
+	(void)state;
+	ready();
+	vehicle_set_link_timeout(&S.vehicle, 0);
+	EXPECT("moveForward 2000", "ok true");
+	sim_run_ms(&S, 1000);
+	EXPECT("$sim drive 1 hold", "ok drive 1 hold");
+	sim_tick(&S);
+	EXPECT("getActiveAlarm 4",
+	       "ok true 1 1 212 fault \"drive 1 left Operation enabled: Switched on\"");
+	assert_int_equal(S.vehicle.wheel_cps_q8[0], 0);
+	assert_int_equal(S.vehicle.wheel_cps_q8[1], 0);
+	EXPECT("getServoStatus 0", "ok true false");
+}
+
+/* 12: a drive restarts (its count starts at 0): warning 155, the pose does
+ * not jump, motion is refused (132) until setPosition. */
+static void test_drive_restart_loses_position(void **state)
+{
+	(void)state;
+	ready();
+	vehicle_set_link_timeout(&S.vehicle, 0); /* long waits without requests */
+	EXPECT("moveForward 300", "ok true");
+	sim_run_ms(&S, 3000);
+	EXPECT("setServo false", "ok true");
+	char before[CONSOLE_REPLY_MAX];
+	snprintf(before, sizeof before, "%s", ex("getPosition"));
+	assert_true(fabs(odom_x() - 300.0) < 0.05);
+	EXPECT("$sim drive 1 reboot", "ok drive 1 reboot");
+	sim_run_ms(&S, 10);
+	EXPECT("getActiveAlarm 1",
+	       "ok true 1 1 155 warning \"drive 1 position lost: setPosition required\"");
+	EXPECT("getPosition", before); /* no jump of 300 mm on wheel 1 */
+	EXPECT("setServo true", "ok true");
+	EXPECT("moveForward 100", "ok false");
+	EXPECT("getActiveAlarm 1",
+	       "ok true 2 1 132 warning \"moveForward refused: position lost\"");
+	EXPECT("moveJog 100 0 0", "ok false");
+	EXPECT("setPosition 0 0 0", "ok true");
+	EXPECT("moveForward 100", "ok true");
+	sim_run_ms(&S, 3000);
+	assert_true(fabs(odom_x() - 100.0) < 0.05);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -268,6 +354,9 @@ int main(void)
 	    cmocka_unit_test_setup(test_hold_is_bounded, setup_diff),
 	    cmocka_unit_test_setup(test_mecanum_speed_is_a_vector, setup_omni),
 	    cmocka_unit_test_setup(test_stop_ends_pause, setup_diff),
+	    cmocka_unit_test_setup(test_servo_on_waits_for_every_drive, setup_diff),
+	    cmocka_unit_test_setup(test_drive_leaving_enabled_stops_all, setup_diff),
+	    cmocka_unit_test_setup(test_drive_restart_loses_position, setup_diff),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

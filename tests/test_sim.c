@@ -114,7 +114,8 @@ static void sim_extras_replies(void **state)
 	assert_false(pl->w[0].stuck);
 	assert_false(pl->w[0].silent);
 	expect("$sim drive 2 ok", "error 8 no axis 2 (0..1)");
-	expect("$sim drive x ok", "error 8 usage: $sim drive AXIS fault CODE|ok|stuck|silent");
+	expect("$sim drive x ok",
+	       "error 8 usage: $sim drive AXIS fault CODE|ok|stuck|silent|hold|reboot");
 	expect("$sim battery 21500", "ok battery 21500");
 	assert_true(pl->battery_ocv_v == 21.5);
 	expect("$sim battery -1", "error 8 usage: $sim battery MV (0..1000000)");

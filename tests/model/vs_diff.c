@@ -332,7 +332,7 @@ static int do_op(rd_t *r)
 			    allowed == 1   ? "false only"
 			    : allowed == 2 ? "true only"
 					   : "none");
-	if (!ok && strcmp(c.op, "setPower") != 0) {
+	if (!ok && M.nrefuse > 0) {
 		uint32_t code = S.vehicle.alarms.n ? S.vehicle.alarms.a[0].code : 0;
 		bool known = false;
 		for (unsigned i = 0; i < M.nrefuse; i++)
@@ -345,7 +345,7 @@ static int do_op(rd_t *r)
 	}
 	vm_apply(&M, &c, ok);
 	if (ok && strcmp(c.op, "getServoStatus") == 0) {
-		bool want = M.servo;
+		bool want = vm_servo_status(&M, c.u);
 		if ((strcmp(rep + 8, "true") == 0) != want)
 			return fail("'%s': the model says servo %s", rep, want ? "on" : "off");
 	}
@@ -365,7 +365,7 @@ static int do_op(rd_t *r)
 static int do_input(rd_t *r)
 {
 	plant_t *pl = &S.plant;
-	uint8_t k = u8(r) % 14, a = u8(r);
+	uint8_t k = u8(r) % 16, a = u8(r);
 	switch (k) {
 	case 0:
 	case 1:
@@ -430,6 +430,23 @@ static int do_input(rd_t *r)
 		vm_input(&M, VM_IN_STICK, false);
 		snprintf(H.act, sizeof H.act, "joystick lost");
 		break;
+	case 14: {
+		uint8_t ax = (uint8_t)(a % pl->n);
+		bool on = !(M.held & (1u << ax));
+		plant_drive_hold(pl, ax, on);
+		M.in_axis = ax;
+		vm_input(&M, VM_IN_DRIVE_HOLD, on);
+		snprintf(H.act, sizeof H.act, "drive %u %s", ax, on ? "held off" : "released");
+		break;
+	}
+	case 15: {
+		uint8_t ax = (uint8_t)(a % pl->n);
+		plant_drive_reboot(pl, ax);
+		M.in_axis = ax;
+		vm_input(&M, VM_IN_DRIVE_REBOOT, true);
+		snprintf(H.act, sizeof H.act, "drive %u reboots", ax);
+		break;
+	}
 	case 12:
 		H.caution = !H.caution;
 		pl->caution = H.caution;
@@ -497,6 +514,7 @@ static void setup(uint8_t mode)
 	    .acc_limit_t = cfg.acc_limit_t_mm_s2,
 	    .acc_limit_r = cfg.acc_limit_r_deg_s2,
 	    .link_timeout_ms = cfg.link_timeout_ms,
+	    .servo_on_timeout_ms = cfg.servo_on_timeout_ms,
 	    .jog_timeout_ms = cfg.jog_timeout_default_ms,
 	    .tick_us = 1000000u / cfg.tick_hz,
 	    .queue_cap = MOTION_QUEUE_LEN,

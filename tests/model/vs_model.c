@@ -22,14 +22,18 @@ enum {
 	W_PAUSED = 129,
 	W_STUCK = 130,
 	W_JOYSTICK = 131,
+	W_POSE_LOST = 132,
 	W_CONTACT = 150,
 	W_OBSTACLE = 151,
 	W_JOYSTICK_LOST = 152,
 	W_LINK_LOST = 153,
+	W_DRIVE_RESTARTED = 155,
 	F_DRIVE = 201,
 	F_POWER_ON = 205,
 	F_POWER_LOST = 206,
 	F_ESTOP = 208,
+	F_NOT_ENABLED = 211,
+	F_DISABLED = 212,
 };
 
 #define POS_MAX	  1e6
@@ -90,7 +94,13 @@ static bool host_work(const vm_t *m)
 /* Spec 5, "Servo-on": servo on and no fault or lock (stuck too, 6.10). */
 static bool can_run(const vm_t *m)
 {
-	return m->powered && m->servo && !vm_fault(m) && !m->locked && !m->stuck;
+	return m->powered && m->servo && !m->servo_wait && !vm_fault(m) && !m->locked && !m->stuck;
+}
+
+bool vm_servo_status(const vm_t *m, unsigned axis)
+{
+	uint32_t b = 1u << axis;
+	return m->servo && !(m->held & b) && !(m->rebooted & b);
 }
 
 static bool stick_drives(const vm_t *m)
@@ -133,6 +143,7 @@ static void fault(vm_t *m, uint32_t code)
 	drop_host_work(m);
 	m->paused = false;
 	m->servo = false;
+	m->servo_wait = false;
 	m->brake_left_ms = 0;
 	m->stick_armed = false;
 }
@@ -142,6 +153,7 @@ static void halt(vm_t *m)
 	drop_host_work(m);
 	m->paused = false;
 	m->servo = false;
+	m->servo_wait = false;
 	m->brake_left_ms = 0;
 	m->stick_armed = false;
 }
@@ -194,10 +206,13 @@ static uint32_t gate(const vm_t *m, gate_t g)
 		return W_SERVO_OFF;
 	if (m->joystick)
 		return W_JOYSTICK;
+	/* A drive restarted: where the unit is must be said first. */
+	if (m->pose_lost)
+		return W_POSE_LOST;
 	/* Ready-only: idle with servo on (spec 5, 6.9): not paused, no work,
 	 * at rest in position. */
-	if (g == G_READY &&
-	    (m->paused || host_work(m) || m->brake_left_ms > 0 || m->settle_left_ms > 0))
+	if (g == G_READY && (m->paused || host_work(m) || m->brake_left_ms > 0 ||
+			     m->settle_left_ms > 0 || m->servo_wait))
 		return W_NOT_READY;
 	if (g == G_JOG && m->paused)
 		return W_PAUSED;
@@ -352,6 +367,10 @@ unsigned vm_expect(vm_t *m, const vm_call_t *c)
 			return refuse(m, W_POWER_OFF);
 		if (c->b && !m->servo && vm_fault(m))
 			return refuse(m, W_FAULT_ACTIVE);
+		/* Servo on asks the drives first: a fault one reports now is
+		 * raised, and servo on fails with it (no refusal warning). */
+		if (c->b && !m->servo && (m->drive_latched & ~m->drive_reported))
+			return 1u;
 		return 2u;
 	}
 	/* Every other operation is "always true". */
@@ -364,6 +383,14 @@ void vm_apply(vm_t *m, const vm_call_t *c, bool reply)
 	if (!reply) {
 		if (op_is(c, "setPower"))
 			fault(m, F_POWER_ON);
+		if (op_is(c, "setServo") && m->nrefuse == 0)
+			for (unsigned i = 0; i < m->c.naxes; i++) {
+				uint32_t b = 1u << i;
+				if ((m->drive_latched & b) && !(m->drive_reported & b)) {
+					fault(m, F_DRIVE);
+					m->drive_reported |= b;
+				}
+			}
 		return; /* the refusal's warning: the harness raises what it saw */
 	}
 	if (op_is(c, "moveForward") || op_is(c, "moveTurn") || op_is(c, "moveLinearRel") ||
@@ -396,6 +423,8 @@ void vm_apply(vm_t *m, const vm_call_t *c, bool reply)
 		m->paused = false;
 	} else if (op_is(c, "stop")) {
 		stop_motion(m); /* spec 5 #33 */
+	} else if (op_is(c, "setPosition")) {
+		m->pose_lost = false;
 	} else if (op_is(c, "unlock")) {
 		m->locked = false;
 	} else if (op_is(c, "setDigitalSensorLock")) {
@@ -426,8 +455,14 @@ void vm_apply(vm_t *m, const vm_call_t *c, bool reply)
 	} else if (op_is(c, "setServo")) {
 		if (!c->b && m->servo)
 			halt(m);
-		else if (c->b)
+		else if (c->b && !m->servo) {
+			/* Servo on completes when every drive reports enabled;
+			 * the simulated drives do at once unless held. */
 			m->servo = true;
+			m->rebooted = 0;
+			m->servo_wait = m->held != 0;
+			m->wait_ms = 0;
+		}
 	}
 }
 
@@ -468,6 +503,15 @@ void vm_input(vm_t *m, vm_input_t in, bool on)
 	case VM_IN_PUSH:
 		m->settle_left_ms = m->c.brake_ms;
 		break;
+	case VM_IN_DRIVE_HOLD:
+		if (on)
+			m->held |= 1u << m->in_axis;
+		else
+			m->held &= ~(1u << m->in_axis);
+		break;
+	case VM_IN_DRIVE_REBOOT:
+		m->in_reboot |= 1u << m->in_axis;
+		break;
 	}
 }
 
@@ -479,9 +523,20 @@ static void sample_inputs(vm_t *m)
 	 * without power reports none. */
 	if (!m->powered)
 		m->drive_reported = 0;
-	for (unsigned i = 0; i < m->c.naxes && m->powered; i++) {
+	for (unsigned i = 0; i < m->c.naxes; i++) {
 		uint32_t b = 1u << i;
-		if ((m->drive_latched & b) && !(m->drive_reported & b)) {
+		/* A restart: its count starts over (155), it forgot the enable
+		 * and any fault; the motion stops. */
+		if (m->in_reboot & b) {
+			m->in_reboot &= ~b;
+			m->rebooted |= b;
+			m->drive_latched &= ~b;
+			m->drive_reported &= ~b;
+			stop_motion(m);
+			m->pose_lost = true;
+			raise(m, W_DRIVE_RESTARTED);
+		}
+		if (m->powered && (m->drive_latched & b) && !(m->drive_reported & b)) {
 			fault(m, F_DRIVE);
 			m->drive_reported |= b;
 		}
@@ -512,6 +567,22 @@ static void sample_inputs(vm_t *m)
 		m->stuck = false;
 	}
 	m->obstacle = o;
+	/* Servo on: waits for every drive; once on, a drive out of Operation
+	 * enabled is a fault (no wheel drives alone). */
+	if (m->servo && m->powered) {
+		uint32_t off = m->held | m->rebooted;
+		unsigned ax = 0;
+		while (ax < m->c.naxes && !(off & (1u << ax)))
+			ax++;
+		if (m->servo_wait) {
+			if (ax == m->c.naxes)
+				m->servo_wait = false;
+			else if (++m->wait_ms > m->c.servo_on_timeout_ms)
+				fault(m, F_NOT_ENABLED);
+		} else if (ax < m->c.naxes) {
+			fault(m, F_DISABLED);
+		}
+	}
 }
 
 void vm_heard(vm_t *m)
@@ -609,7 +680,8 @@ uint32_t vm_states(const vm_t *m, uint32_t *fault_num, uint32_t *warn_num)
 	if (m->paused)
 		return VM_BIT(0x15) | braking;
 	uint32_t idle = *warn_num ? VM_BIT(0x12) : VM_BIT(0x10);
-	bool sure = m->path == VM_WORK_SURE || m->cont == VM_WORK_SURE || (m->jog && !m->jog_zero);
+	bool sure = m->path == VM_WORK_SURE || m->cont == VM_WORK_SURE ||
+		    (m->jog && !m->jog_zero) || m->servo_wait;
 	if (sure)
 		return VM_BIT(0x11);
 	bool maybe = m->nq > 0 || m->cont != VM_WORK_NONE || m->jog || braking || stick_drives(m);

@@ -31,7 +31,8 @@ typedef struct {
 	unsigned naxes;
 	double vel_limit_t, vel_limit_r, acc_limit_t, acc_limit_r;
 	uint32_t link_timeout_ms; /* 0: no link watchdog */
-	uint32_t jog_timeout_ms;  /* at start-up */
+	uint32_t servo_on_timeout_ms;
+	uint32_t jog_timeout_ms; /* at start-up */
 	uint32_t tick_us;
 	/* The longest a stop may take to come to rest and settle (from the
 	 * velocity limit at the acceleration limit, plus the settle time). */
@@ -73,7 +74,13 @@ typedef struct {
 	bool in_contact, in_obstacle, in_drop;
 	uint32_t drive_latched, drive_reported; /* per axis: a fault, until clearAlarm resets it */
 	uint32_t settle_left_ms;
-	unsigned in_axis; /* a push: the hold may be busy this long */
+	unsigned in_axis;
+	/* Drives: power stages held off (an STO), drives that rebooted (they
+	 * forgot the enable until the next setServo(true)); servo on waiting
+	 * for them (wait_ms so far); a position lost to a reboot. */
+	uint32_t held, rebooted, in_reboot;
+	bool servo_wait, pose_lost;
+	uint32_t wait_ms; /* a push: the hold may be busy this long */
 	uint32_t silent_ms;
 	bool wd_open;
 	/* Alarms, newest first. */
@@ -116,11 +123,13 @@ typedef enum {
 	VM_IN_OBSTACLE, /* on / off */
 	VM_IN_ESTOP,	/* on / off */
 	VM_IN_RELAY_DROP,
-	VM_IN_RELAY_FAIL,  /* on: setPower(true) fails until off (repaired) */
-	VM_IN_DRIVE_FAULT, /* on axis vm_t.in_axis */
-	VM_IN_STICK,	   /* on: deflected past the deadband; off: neutral */
-	VM_IN_STICK_LOST,  /* on: the joystick device is gone; off: it is back */
-	VM_IN_PUSH,	   /* the base was pushed: the hold brings it back */
+	VM_IN_RELAY_FAIL,   /* on: setPower(true) fails until off (repaired) */
+	VM_IN_DRIVE_FAULT,  /* on axis vm_t.in_axis */
+	VM_IN_STICK,	    /* on: deflected past the deadband; off: neutral */
+	VM_IN_STICK_LOST,   /* on: the joystick device is gone; off: it is back */
+	VM_IN_PUSH,	    /* the base was pushed: the hold brings it back */
+	VM_IN_DRIVE_HOLD,   /* on/off: vm_t.in_axis's power stage held off */
+	VM_IN_DRIVE_REBOOT, /* vm_t.in_axis restarts */
 } vm_input_t;
 void vm_input(vm_t *m, vm_input_t in, bool on);
 
@@ -137,5 +146,7 @@ void vm_observe(vm_t *m, int code);
 /* The unit may be moving now (commanded motion, or braking from it). */
 bool vm_may_move(const vm_t *m);
 bool vm_fault(const vm_t *m);
+/* getServoStatus(axis): the drive's own report. */
+bool vm_servo_status(const vm_t *m, unsigned axis);
 
 #endif
