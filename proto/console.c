@@ -559,14 +559,15 @@ static bool exec_line(console_t *c, const char *line, size_t len, rbuf_t *r)
 
 	while (i < len && (line[i] == ' ' || line[i] == '\t'))
 		i++;
+	/* A comment is ignored whatever it holds (scripts may carry UTF-8) and
+	 * however long it is. */
+	if (i < len && line[i] == '#')
+		return false;
 	if (len > CONSOLE_LINE_MAX) {
 		c->lines++;
 		return reply_error(c, r, "%d line too long (max %d bytes)", CONSOLE_E_TOO_LONG,
 				   CONSOLE_LINE_MAX);
 	}
-	/* A comment is ignored whatever it holds (scripts may carry UTF-8). */
-	if (i < len && line[i] == '#')
-		return false;
 	for (size_t k = 0; k < len; k++) {
 		unsigned char b = (unsigned char)line[k];
 
@@ -681,10 +682,13 @@ void console_set_extra(console_t *c, console_extra_fn fn, void *ctx)
 
 bool console_exec(console_t *c, const char *line, char *reply, size_t cap)
 {
-	/* Look no further than one byte past the limit: that is enough to know
-	 * the line is too long. */
-	size_t len = strnlen(line, CONSOLE_LINE_MAX + 1);
+	/* Look no further than one byte past the limit beyond the leading
+	 * blanks: enough to know the line is too long, and whether it is a
+	 * comment. */
+	size_t len = strspn(line, " \t");
 	rbuf_t r;
+
+	len += strnlen(line + len, CONSOLE_LINE_MAX + 1);
 
 	rb_init(&r, reply, cap);
 	return exec_line(c, line, len, &r);
@@ -703,16 +707,9 @@ static void end_line(console_t *c)
 	rbuf_t r;
 
 	rb_init(&r, reply, CONSOLE_REPLY_MAX);
-	if (c->overflow) {
-		c->lines++;
-		reply_error(c, &r, "%d line too long (max %d bytes)", CONSOLE_E_TOO_LONG,
-			    CONSOLE_LINE_MAX);
+	if (exec_line(c, c->line, c->len, &r))
 		emit(c, reply, r.len);
-	} else if (exec_line(c, c->line, c->len, &r)) {
-		emit(c, reply, r.len);
-	}
 	c->len = 0;
-	c->overflow = false;
 }
 
 void console_feed(console_t *c, const uint8_t *data, size_t n)
@@ -736,10 +733,12 @@ void console_feed(console_t *c, const uint8_t *data, size_t n)
 			c->text = c->in_line ? c->text && (ascii || b >= 0x80) : ascii;
 			c->in_line = true;
 		}
-		if (c->overflow)
-			continue;
-		if (c->len >= CONSOLE_LINE_MAX) {
-			c->overflow = true;
+		if (c->len > CONSOLE_LINE_MAX) {
+			/* Over-long: discarded whole at its ending, silently if it
+			 * is a comment. Of the rest only the first non-blank byte
+			 * matters, should the kept bytes all be blanks. */
+			if (c->line[CONSOLE_LINE_MAX] == ' ' || c->line[CONSOLE_LINE_MAX] == '\t')
+				c->line[CONSOLE_LINE_MAX] = (char)b;
 			continue;
 		}
 		c->line[c->len++] = (char)b;

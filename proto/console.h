@@ -2,8 +2,8 @@
  *
  * Bytes from the link are collected into lines (CR, LF or CRLF end a line);
  * each complete line yields exactly one reply line (none for an empty line
- * or a '#' comment). A line longer than CONSOLE_LINE_MAX bytes is discarded
- * whole and answered with one error. Interface operations come from the
+ * or a '#' comment, however long). A line longer than CONSOLE_LINE_MAX bytes
+ * is discarded whole and answered with one error. Interface operations come from the
  * command table (proto/commands.def); bring-up extras start with '$' and
  * never change the meaning of an operation.
  */
@@ -42,12 +42,13 @@ typedef struct {
 	void *wctx;
 	console_extra_fn extra;
 	void *xctx;
+	/* The line; len CONSOLE_LINE_MAX + 1: over-long, the rest discarded
+	 * (the last byte kept is the first non-blank one, for a comment). */
 	char line[CONSOLE_LINE_MAX + 1];
 	size_t len;
-	bool overflow; /* discarding the rest of an over-long line */
-	bool last_cr;  /* swallow the LF of a CRLF */
-	bool in_line;  /* bytes of a line received since the last line ending */
-	bool text;     /* ... and they are a line of text (console_in_text) */
+	bool last_cr; /* swallow the LF of a CRLF */
+	bool in_line; /* bytes of a line received since the last line ending */
+	bool text;    /* ... and they are a line of text (console_in_text) */
 	uint32_t lines, errors;
 } console_t;
 

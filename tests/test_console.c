@@ -508,7 +508,62 @@ static void test_line_length(void **state)
 	assert_string_equal(out, "error 6 line too long (max 255 bytes)\n"
 				 "ok true 25 \"Unpowered\"\n");
 	assert_int_equal(con.len, 0);
-	assert_false(con.overflow);
+}
+
+/* A comment gets no reply however long it is (spec section 7), and is
+ * discarded whole: nothing of it reaches the next line. Over-long lines
+ * that are not comments still get error 6, once. */
+static void test_long_comment(void **state)
+{
+	char line[1200];
+
+	(void)state;
+	/* 300 bytes: "# " and x's, in one piece and a byte at a time */
+	memset(line, 'x', sizeof(line));
+	memcpy(line, "# ", 2);
+	line[300] = '\n';
+	feed_str(line, 301);
+	assert_int_equal(out_len, 0);
+	for (size_t i = 0; i <= 300; i++)
+		feed_str(line + i, 1);
+	assert_int_equal(out_len, 0);
+	/* 1,100 bytes of any kind after leading blanks, CR LF ended, then a
+	 * line that runs: its reply is the only one */
+	memset(line, ' ', 10);
+	line[10] = '#';
+	for (size_t i = 11; i < 1100; i++)
+		line[i] = (char)(i % 7 == 0 ? 0xA5 : i % 5 == 0 ? 0x01 : 'a' + (int)(i % 26));
+	memcpy(line + 1100, "\r\n", 2);
+	feed_str(line, 1102);
+	FEED("getState\n");
+	assert_string_equal(out, "ok true 25 \"Unpowered\"\n");
+	out_len = 0;
+	out[0] = '\0';
+	/* its first non-blank byte past the 255 kept: still a comment */
+	memset(line, ' ', 600);
+	memcpy(line + 400, "# late", 6);
+	line[600] = '\n';
+	feed_str(line, 601);
+	assert_int_equal(out_len, 0);
+	/* ... but an operation there is a line too long, and so are 600 blanks */
+	memcpy(line + 400, "getSta", 6);
+	feed_str(line, 601);
+	memset(line, ' ', 600);
+	feed_str(line, 601);
+	assert_string_equal(out, "error 6 line too long (max 255 bytes)\n"
+				 "error 6 line too long (max 255 bytes)\n");
+	assert_int_equal(con.len, 0);
+	/* console_exec (the simulator's stdin lines) says the same */
+	line[600] = '\0';
+	memcpy(line + 400, "#  x", 4);
+	EXPECT(line, "(none)");
+	memset(line, '#', 600);
+	EXPECT(line, "(none)");
+	line[0] = 'g';
+	EXPECT(line, "error 6 line too long (max 255 bytes)");
+	/* four lines answered: getState and three errors; comments count none */
+	assert_int_equal(con.lines, 4);
+	assert_int_equal(con.errors, 3);
 }
 
 static void test_binary_garbage(void **state)
@@ -591,7 +646,7 @@ static void test_fuzz_feed(void **state)
 		out[0] = '\0';
 		console_feed(&con, buf, n);
 		check_replies_well_formed();
-		assert_true(con.len <= CONSOLE_LINE_MAX);
+		assert_true(con.len <= CONSOLE_LINE_MAX + 1);
 		if (it % 64 == 0)
 			fake_run(&fh, &veh, 5);
 	}
@@ -744,7 +799,8 @@ static void test_config(void **state)
 	       "acc_default_r_deg_s2 jerk_limit_t_mm_s3 jerk_limit_r_deg_s3 "
 	       "jerk_default_t_mm_s3 jerk_default_r_deg_s3 jog_timeout_default_ms wheel_kp_per_s "
 	       "drive_lag_ms "
-	       "following_error_mm encoder_stuck_ms drive_timeout_ms loop_late_ms link_timeout_ms "
+	       "following_error_mm encoder_stuck_ms drive_timeout_ms servo_on_timeout_ms "
+	       "loop_late_ms link_timeout_ms "
 	       "position_window_mm position_window_ms settle_timeout_ms cruise_blend_mm "
 	       "caution_vel_t_mm_s battery_critical_v battery_low_v has_contact_sensor "
 	       "has_obstacle_input has_estop has_joystick joystick_deadband");
@@ -849,6 +905,7 @@ int main(void)
 	    cmocka_unit_test_setup(test_line_endings, setup),
 	    cmocka_unit_test_setup(test_comments_and_empty_lines, setup),
 	    cmocka_unit_test_setup(test_line_length, setup),
+	    cmocka_unit_test_setup(test_long_comment, setup),
 	    cmocka_unit_test_setup(test_binary_garbage, setup),
 	    cmocka_unit_test_setup(test_fuzz_feed, setup),
 	    cmocka_unit_test_setup(test_reply_formats, setup),
