@@ -139,6 +139,26 @@ void vs_config_set(vs_config_t *c, const vs_config_field_t *f, unsigned k, doubl
 /* Whether c is a mecanum base. A build for one base (-DVS_KIN_ONLY=0
  * differential, 1 mecanum: a board, whose configuration is compiled in)
  * keeps that base's code only, and vs_config_check refuses the other. */
+/* Whether c has a joystick. A board built without one (-DVS_NO_JOYSTICK)
+ * carries no joystick code: setJoystick(true) finds none (warning 152). */
+#ifdef VS_NO_JOYSTICK
+#define vs_config_joystick(c) ((void)(c), false)
+#else
+#define vs_config_joystick(c) ((c)->has_joystick)
+#endif
+/* The discrete safety inputs (contact, obstacle and caution, e-stop). A
+ * board built without them (-DVS_NO_INPUTS: the loopback board has none)
+ * carries no code for them. */
+#ifdef VS_NO_INPUTS
+#define vs_config_contact(c)  ((void)(c), false)
+#define vs_config_obstacle(c) ((void)(c), false)
+#define vs_config_estop(c)    ((void)(c), false)
+#else
+#define vs_config_contact(c)  ((c)->has_contact_sensor)
+#define vs_config_obstacle(c) ((c)->has_obstacle_input)
+#define vs_config_estop(c)    ((c)->has_estop)
+#endif
+
 #ifdef VS_KIN_ONLY
 #define vs_config_omni(c) ((void)(c), VS_KIN_ONLY == VS_KIN_OMNI)
 #else

@@ -174,9 +174,7 @@ void motion_velocity_tick(motion_t *m, fx_twist_t *out)
 	/* Caution cap and set velocity bound the target: the translation as a
 	 * vector (a mecanum diagonal is not faster than the cap). */
 	q32_t vt = vt_eff(m);
-	tgt.vx_pt = fx_clamp64(tgt.vx_pt, -vt, vt);
-	tgt.vy_pt = fx_clamp64(tgt.vy_pt, -vt, vt);
-	if (tgt.vx_pt != 0 && tgt.vy_pt != 0) {
+	if (KIN_OMNI(m->p.kin) && tgt.vy_pt != 0) {
 		q32_t len = fx_hypot(tgt.vx_pt, tgt.vy_pt);
 		if (len > vt) {
 			/* Rounded toward zero: never over the cap. */
@@ -184,6 +182,8 @@ void motion_velocity_tick(motion_t *m, fx_twist_t *out)
 			tgt.vx_pt = fx_mul(tgt.vx_pt, k);
 			tgt.vy_pt = fx_mul(tgt.vy_pt, k);
 		}
+	} else {
+		tgt.vx_pt = fx_clamp64(tgt.vx_pt, -vt, vt);
 	}
 	tgt.w_pt = fx_clamp64(tgt.w_pt, -m->v_r_pt, m->v_r_pt);
 	if (m->j_t_pt3 | m->j_r_pt3) {

@@ -46,8 +46,10 @@ static const char *refusal_reason(uint32_t code)
 		return "unit stuck";
 	case ALM_W_JOYSTICK:
 		return "joystick in use";
+#if !defined(VS_NO_DRIVE_STATES)
 	case ALM_W_POSE_LOST:
 		return "position lost";
+#endif
 	default:
 		return "refused";
 	}
@@ -89,7 +91,7 @@ bool vehicle_move_gate(vehicle_t *v, const char *op, vehicle_gate_t gate)
 		return vehicle_refuse(v, op, ALM_W_SERVO_OFF);
 	if (v->joystick_on)
 		return vehicle_refuse(v, op, ALM_W_JOYSTICK);
-	if (v->pose_lost)
+	if (VS_DRIVE_STATES && v->pose_lost)
 		return vehicle_refuse(v, op, ALM_W_POSE_LOST);
 	if (gate == VEHICLE_GATE_READY && (motion_is_paused(&v->motion) ||
 					   motion_has_work(&v->motion) || !vehicle_in_position(v)))
@@ -228,7 +230,7 @@ bool vs_getState(vehicle_t *v, int16_t *state, char msg[VS_STATE_MSG_MAX])
 	/* Braking for a lock, an obstacle or a pause, or settling, the unit is
 	 * Busy: the state that follows is reported once the wheels are in
 	 * place. */
-	bool settled = v->servo_wait || vehicle_in_position(v);
+	bool settled = vehicle_servo_waiting(v) || vehicle_in_position(v);
 	int16_t code;
 	if (fault) {
 		code = VS_STATE_ALARM;
@@ -248,7 +250,7 @@ bool vs_getState(vehicle_t *v, int16_t *state, char msg[VS_STATE_MSG_MAX])
 	} else if (settled && motion_is_paused(&v->motion)) {
 		code = VS_STATE_PAUSED;
 		state_msg(v->state_msg, "Paused", NULL);
-	} else if (!settled || v->servo_wait || motion_has_work(&v->motion)) {
+	} else if (!settled || vehicle_servo_waiting(v) || motion_has_work(&v->motion)) {
 		code = VS_STATE_BUSY;
 		state_msg(v->state_msg, "Busy", NULL);
 	} else if (warn) {
@@ -266,7 +268,7 @@ bool vs_getState(vehicle_t *v, int16_t *state, char msg[VS_STATE_MSG_MAX])
 bool vs_pause(vehicle_t *v)
 {
 	motion_pause(&v->motion);
-	v->stick_armed = false;
+	vehicle_disarm_stick(v);
 	return true;
 }
 
@@ -279,7 +281,7 @@ bool vs_resume(vehicle_t *v)
 bool vs_stop(vehicle_t *v)
 {
 	motion_stop(&v->motion);
-	v->stick_armed = false;
+	vehicle_disarm_stick(v);
 	return true;
 }
 
@@ -309,7 +311,7 @@ bool vs_setJoystick(vehicle_t *v, bool OnOff)
 	if (OnOff != v->joystick_on)
 		motion_joystick_enable(&v->motion, OnOff);
 	v->joystick_on = OnOff;
-	v->stick_armed = false;
+	vehicle_disarm_stick(v);
 	return true;
 }
 
@@ -364,9 +366,11 @@ bool vs_setServo(vehicle_t *v, bool OnOff)
 	}
 	/* The drives' own word on it (a drive that enables at once, as the
 	 * simulated one does, completes servo on here). */
-	vehicle_sample_drives(v);
-	if (alarm_any_fault(&v->alarms))
-		return false;
+	if (VS_DRIVE_STATES) {
+		vehicle_sample_drives(v);
+		if (alarm_any_fault(&v->alarms))
+			return false;
+	}
 	/* Wheel references start at the measured counts: no jump, and in
 	 * position (nothing to settle). */
 	kin_sync(&v->kin, v->meas_counts);
@@ -375,7 +379,7 @@ bool vs_setServo(vehicle_t *v, bool OnOff)
 	v->servo = true;
 	v->servo_wait = false;
 	v->servo_wait_ticks = 0;
-	for (uint8_t i = 0; i < v->naxes; i++)
+	for (uint8_t i = 0; VS_DRIVE_STATES && i < v->naxes; i++)
 		v->servo_wait |= !v->drive[i].enabled;
 	return true;
 }

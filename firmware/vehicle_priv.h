@@ -19,6 +19,26 @@ size_t vehicle_put_volts(char *b, size_t cap, size_t pos, uint32_t mv);
 /* "<what><axis><tail>" */
 void vehicle_axis_text(char *s, size_t cap, const char *what, uint8_t axis, const char *tail);
 
+/* Drives that report their state, their enable and a restart (hal.h): the
+ * servo on waits for them, a drive leaving Operation enabled or restarting
+ * is supervised. A board whose drives are its own loopback (enabled at
+ * once, never restarting) leaves this out (-DVS_NO_DRIVE_STATES). */
+#ifdef VS_NO_DRIVE_STATES
+#define VS_DRIVE_STATES 0
+#else
+#define VS_DRIVE_STATES 1
+#endif
+
+/* Servo on still waiting for a drive (always false without drive states). */
+#define vehicle_servo_waiting(v) (VS_DRIVE_STATES && (v)->servo_wait)
+
+/* The stick must come back to neutral before it drives (docs/states.md). */
+#ifdef VS_NO_JOYSTICK
+#define vehicle_disarm_stick(v) ((void)(v))
+#else
+#define vehicle_disarm_stick(v) ((v)->stick_armed = false)
+#endif
+
 void vehicle_servo_off(vehicle_t *v);
 /* Read every drive once (vehicle_tick.c): what the tick does first. */
 void vehicle_sample_drives(vehicle_t *v);

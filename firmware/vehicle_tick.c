@@ -151,6 +151,11 @@ static COLD void drive_fault_report(vehicle_t *v, uint8_t i, uint16_t fc)
 /* The drive's own state, in the drive's words (CiA 402 names). */
 static const char *phase_name(uint8_t ph)
 {
+#ifdef VS_NO_DRIVE_STATES
+	/* A board whose drives report no state carries no names. */
+	(void)ph;
+	return "";
+#else
 	static const char *const names[HAL_DRIVE_STATE_COUNT] = {"",
 								 "Not ready to switch on",
 								 "Switch on disabled",
@@ -162,6 +167,7 @@ static const char *phase_name(uint8_t ph)
 								 "Fault",
 								 "not operational"};
 	return ph < HAL_DRIVE_STATE_COUNT ? names[ph] : "";
+#endif
 }
 
 /* "drive <axis> <what>: <state>" (no state when the backend does not know
@@ -169,6 +175,11 @@ static const char *phase_name(uint8_t ph)
 static COLD void drive_state_fault(vehicle_t *v, uint32_t code, uint8_t i, const char *what)
 {
 	char s[VS_ALARM_SOURCE_MAX];
+#ifdef VS_NO_DRIVE_STATES
+	vehicle_axis_text(s, sizeof s, "drive ", i, what);
+	vehicle_raise_fault(v, code, s);
+	return;
+#endif
 	size_t pos = vehicle_put_str(s, sizeof s, 0, "drive ");
 	pos = vehicle_put_dec(s, sizeof s, pos, i, 1);
 	pos = vehicle_put_str(s, sizeof s, pos, what);
@@ -217,7 +228,7 @@ static void supervise_enable(vehicle_t *v)
 	}
 }
 
-void vehicle_sample_drives(vehicle_t *v)
+__attribute__((noinline)) void vehicle_sample_drives(vehicle_t *v)
 {
 	/* Each drive's condition is reported once per occurrence (and again
 	 * after clearAlarm while it persists), so two faulted drives do not
@@ -239,7 +250,7 @@ void vehicle_sample_drives(vehicle_t *v)
 		v->drive[i] = st;
 		supervise_encoder(v, i, st.position_counts != v->meas_counts[i]);
 		v->meas_counts[i] = st.position_counts;
-		if (st.position_lost) {
+		if (VS_DRIVE_STATES && st.position_lost) {
 			v->kin.last_meas[i] = st.position_counts;
 			drive_restarted(v, i);
 		}
@@ -267,7 +278,7 @@ static void supervise_inputs(vehicle_t *v)
 	const vs_hal_ops_t *o = v->hal.ops;
 	void *c = v->hal.ctx;
 
-	if (v->cfg.has_estop && o->estop(c))
+	if (vs_config_estop(&v->cfg) && o->estop(c))
 		vehicle_raise_fault_level(v, ALM_F_ESTOP, "emergency stop");
 
 	if (v->powered && !o->power_feedback(c)) {
@@ -293,7 +304,7 @@ static void supervise_inputs(vehicle_t *v)
 
 	/* Contact locks on its rising edge, so that after unlock the unit can
 	 * back away while the bumper is still pressed. */
-	if (v->cfg.has_contact_sensor) {
+	if (vs_config_contact(&v->cfg)) {
 		bool contact = o->contact(c);
 		if (contact && !v->contact_prev && v->sensor_lock) {
 			motion_stop(&v->motion);
@@ -303,7 +314,7 @@ static void supervise_inputs(vehicle_t *v)
 		v->contact_prev = contact;
 	}
 
-	if (v->cfg.has_obstacle_input) {
+	if (vs_config_obstacle(&v->cfg)) {
 		bool obstacle = o->obstacle(c);
 		if (obstacle && !v->obstacle_prev) {
 			motion_stop(&v->motion);
@@ -341,7 +352,7 @@ static void feed_joystick(vehicle_t *v)
 	if (!v->joystick_on)
 		return;
 	hal_joystick_t js = {{0, 0, 0}, false};
-	if (v->cfg.has_joystick)
+	if (vs_config_joystick(&v->cfg))
 		v->hal.ops->joystick(v->hal.ctx, &js);
 	if (!js.present) {
 		/* Off for good: a joystick coming back must not move the unit. */
@@ -469,23 +480,31 @@ static void bound_hold(vehicle_t *v, const int32_t prev[])
 	int64_t hz = v->cfg.tick_hz;
 	q32_t cpm = v->kin.p.counts_per_mm;
 	int64_t far = cpm; /* 1 mm in counts, Q32 */
+	/* Plain comparisons: the fx helpers are out of line on a board, a
+	 * copy per file. */
 	for (uint8_t i = 0; i < v->naxes; i++) {
-		int64_t err = fx_abs64(v->kin.ref_counts_q32[i]);
+		int64_t err = v->kin.ref_counts_q32[i];
+		if (err < 0)
+			err = -err;
 		if (err <= far)
 			continue;
 		q32_t a_pt2 = fx_mul(motion_accel_set(&v->motion), cpm); /* counts/tick^2 */
-		int64_t step = fx_max64((a_pt2 * hz) >> 24, 1);
-		int64_t cap = (fx_mul(motion_speed_cap(&v->motion), cpm) * hz) >> 24;
-		int64_t b = fx_min64(cap, (traj_umax(err, a_pt2) * hz) >> 24);
+		int64_t step = ((a_pt2 * hz) >> 24) + 1;
+		int64_t b = (fx_mul(motion_speed_cap(&v->motion), cpm) * hz) >> 24;
+		int64_t u = (traj_umax(err, a_pt2) * hz) >> 24;
 		int64_t p = prev[i] < 0 ? -(int64_t)prev[i] : prev[i];
-		b = fx_min64(b, p + step);
-		v->wheel_cps_q8[i] = (int32_t)fx_clamp64(v->wheel_cps_q8[i], -b, b);
+		if (u < b)
+			b = u;
+		if (p + step < b)
+			b = p + step;
+		int32_t o = v->wheel_cps_q8[i];
+		v->wheel_cps_q8[i] = (int32_t)(o > b ? b : o < -b ? -b : o);
 	}
 }
 
 bool vehicle_in_position(const vehicle_t *v)
 {
-	if (v->servo_wait)
+	if (vehicle_servo_waiting(v))
 		return false;
 	return !v->servo || v->inpos_ticks >= v->window_ticks ||
 	       v->settle_ticks > v->settle_timeout_ticks;
@@ -498,7 +517,7 @@ void vehicle_tick(vehicle_t *v, uint32_t now_us)
 	supervise_inputs(v);
 	/* After the inputs: a relay that opened is a power fault, not a drive
 	 * that left Operation enabled. */
-	if (v->servo)
+	if (VS_DRIVE_STATES && v->servo)
 		supervise_enable(v);
 	supervise_link(v);
 	feed_joystick(v);
@@ -508,11 +527,11 @@ void vehicle_tick(vehicle_t *v, uint32_t now_us)
 	 * loop holds the unit there: one owner of where the unit is. Only with
 	 * the servo off (wheels free) does it follow the odometry. */
 	/* While the servo comes on the motion waits (nothing to drive yet). */
-	if (v->servo && v->servo_wait)
+	if (v->servo && vehicle_servo_waiting(v))
 		cmd = (fx_twist_t){0, 0, 0};
 	else
 		motion_tick(&v->motion, v->servo ? NULL : &v->odom, &cmd);
-	if (!v->servo || v->servo_wait) {
+	if (!v->servo || vehicle_servo_waiting(v)) {
 		/* Nothing may move with the servo off; the odometry still
 		 * follows wheels pushed by hand. */
 		cmd = (fx_twist_t){0, 0, 0};
@@ -533,7 +552,7 @@ void vehicle_tick(vehicle_t *v, uint32_t now_us)
 		following_fault(v, ferr);
 	supervise_position(v, ferr, &delta);
 
-	if (!v->servo || v->servo_wait)
+	if (!v->servo || vehicle_servo_waiting(v))
 		for (uint8_t i = 0; i < v->naxes; i++)
 			v->wheel_cps_q8[i] = 0;
 	for (uint8_t i = 0; i < v->naxes; i++)

@@ -76,11 +76,11 @@ static bool hal_complete(const vs_hal_t *hal, const vs_config_t *c)
 	    !o->drive_reset_fault || !o->power_set || !o->power_feedback || !o->io_read ||
 	    !o->io_write || !o->battery_mv)
 		return false;
-	if (c->has_contact_sensor && !o->contact)
+	if (vs_config_contact(c) && !o->contact)
 		return false;
-	if (c->has_obstacle_input && (!o->obstacle || !o->obstacle_caution))
+	if (vs_config_obstacle(c) && (!o->obstacle || !o->obstacle_caution))
 		return false;
-	if (c->has_estop && !o->estop)
+	if (vs_config_estop(c) && !o->estop)
 		return false;
 	if (c->has_joystick && !o->joystick)
 		return false;
@@ -327,7 +327,9 @@ bool vs_setPosition(vehicle_t *v, vs_position_t pos)
 	fx_pose_t p = pose_q32(&pos);
 	p.th_deg = fx_wrap_deg(p.th_deg);
 	v->odom = p;
+#ifndef VS_NO_DRIVE_STATES
 	v->pose_lost = false; /* the host says where the unit is */
+#endif
 	/* At rest the new pose is where the unit is now: the wheel loop drops
 	 * what it still had to correct, so that the reference, the odometry
 	 * and the wheels agree (a move sent next starts from p exactly). */

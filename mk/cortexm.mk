@@ -54,6 +54,7 @@ MCU := $(BUILD)/$(TARGET)$(if $(filter omni,$(MCU_KIN)),-omni)
 # docs/mcu.md: how the room was made); the M0 leaves out those that start or
 # end at speed (53 KiB with them) and runs their acceleration-limited forms.
 MCU_DEFS := -DMOTION_QUEUE_LEN=16 -DVS_REAL_Q32 -Wfloat-conversion -DVS_KIN_ONLY=$(MCU_KIN_ONLY) \
+	-DVS_NO_JOYSTICK -DVS_NO_INPUTS -DVS_NO_DRIVE_STATES \
 	$(if $(filter cortex-m0,$(TARGET)),-DMOTION_NO_ONLINE_JERK)
 # Link-time optimisation: inlining and dead-code removal across files saves
 # a tenth of the flash (49.4 KiB -> 44.5 KiB when it was brought in). Fat

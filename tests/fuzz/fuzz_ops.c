@@ -140,7 +140,7 @@ static void check_state(void)
 		abort();
 	for (unsigned i = 0; i < v->alarms.n; i++) {
 		uint32_t c = v->alarms.a[i].code;
-		if (!((c >= 110 && c <= 154) || (c >= 201 && c <= 210)) ||
+		if (!((c >= 110 && c <= 155) || (c >= 201 && c <= 212)) ||
 		    v->alarms.a[i].type != (uint8_t)alarm_type_of(c) ||
 		    !memchr(v->alarms.a[i].source, 0, VS_ALARM_SOURCE_MAX))
 			abort();
