@@ -53,6 +53,8 @@ typedef struct {
 	 * instead of stdin/stdout; runs until a signal. */
 	bool pty_on;
 	int pty_master, pty_slave;
+	server_serial_t ser; /* the pty's budget, flow control and answers */
+	bool skip_line;	     /* --pty --fast: the rest of an over-long stdin line */
 } app_t;
 
 static app_t app;
@@ -166,37 +168,50 @@ static int run_fast(app_t *a)
  * next request through the port gets the same run every time. */
 static int run_pty_fast(app_t *a)
 {
-	while (!stop_requested && !a->write_failed) {
-		struct pollfd p[2] = {{.fd = a->pty_master, .events = POLLIN},
-				      {.fd = STDIN_FILENO, .events = POLLIN}};
+	vs_server_t *srv = &a->sim.srv;
 
-		if (poll(p, 2, -1) < 0) {
+	while (!stop_requested && !a->write_failed) {
+		/* The port's input unless the unit waits for it to take answers,
+		 * its output while answers wait, and at once while the unit can
+		 * take more (its budget per poll was spent). */
+		short ev = (short)((server_serial_blocked(srv) ? 0 : POLLIN) |
+				   (server_serial_queued(srv) ? POLLOUT : 0));
+		struct pollfd p[2] = {{.fd = a->pty_master, .events = ev},
+				      {.fd = STDIN_FILENO, .events = POLLIN}};
+		bool more = server_serial_more(srv);
+
+		if (poll(p, 2, more ? 0 : -1) < 0) {
 			if (errno == EINTR)
 				continue;
 			return 1;
 		}
-		if (p[0].revents & POLLIN)
-			server_poll(&a->sim.srv, (uint32_t)a->sim.now_us);
+		if (more || (p[0].revents & (POLLIN | POLLOUT)))
+			server_poll(srv, (uint32_t)a->sim.now_us);
 		if (!(p[1].revents & (POLLIN | POLLHUP | POLLERR)))
 			continue;
 		if (!read_input(a))
 			return 1;
 		for (;;) {
 			char *nl = memchr(a->in, '\n', a->in_len);
-			char reply[512];
+			char reply[CONSOLE_REPLY_MAX];
+			bool skip = a->skip_line;
 			size_t n;
 
 			if (nl) {
 				n = (size_t)(nl - a->in) + 1;
 				*nl = '\0';
+				a->skip_line = false;
 			} else if (a->in_len == sizeof(a->in) || (a->eof && a->in_len)) {
-				/* Over-long (the console refuses it) or unterminated at EOF. */
+				/* Over-long (the console refuses it, or ignores a
+				 * comment; the rest of the line goes with it) or
+				 * unterminated at EOF. */
 				n = a->in_len;
 				a->in[n < sizeof(a->in) ? n : n - 1] = '\0';
+				a->skip_line = n == sizeof(a->in);
 			} else {
 				break;
 			}
-			if (sim_exec(&a->sim, a->in, reply, sizeof(reply))) {
+			if (!skip && sim_exec(&a->sim, a->in, reply, sizeof(reply))) {
 				size_t len = strlen(reply);
 
 				reply[len] = '\n';
@@ -478,7 +493,7 @@ int main(int argc, char **argv)
 			fprintf(stderr, "vehicle-sim: --pty: %s\n", strerror(errno));
 			return 1;
 		}
-		server_attach_serial(&a->sim.srv, &io);
+		server_serve_serial(&a->sim.srv, &a->ser, &io);
 		a->pty_on = true;
 		printf("%s\n", path);
 		fflush(stdout);

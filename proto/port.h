@@ -1,7 +1,9 @@
 /* The unit's side of a serial port: what the console and the frame server
  * write their answers to. An answer goes out whole or, when the port stops
  * taking bytes, loses its rest (counted); the host's timeout and retry
- * recover it. The console and the frame server call the port; nothing here
+ * recover it. Served by server_poll (server.h), the port is the serial
+ * service's queue, which takes every answer whole; the board's UART ring
+ * can refuse. The console and the frame server call the port; nothing here
  * calls them back.
  */
 #ifndef PROTO_PORT_H

@@ -267,6 +267,76 @@ static void test_rx_hold_keeps_sync_in_other(void **state)
 	assert_int_equal(RX.st.oversize + RX.st.crc_errors + RX.st.truncated, 0);
 }
 
+/* What one received byte can cause, the bound the unit's serial service
+ * sizes its answer queue by (proto/server.h, SERVER_SERIAL_STEP_MAX): every
+ * report (a frame or a NAK) and every line ending handed on belongs to a
+ * distinct byte the receiver held, so a byte causes at most as many as the
+ * receiver then holds (the timeout: as many as it held). */
+static unsigned EVENTS;
+
+static void count_frame(void *ctx, const frame_t *f)
+{
+	(void)ctx;
+	(void)f;
+	EVENTS++;
+}
+
+static void count_endings(void *ctx, const uint8_t *d, size_t n)
+{
+	(void)ctx;
+	for (size_t i = 0; i < n; i++)
+		EVENTS += d[i] == '\r' || d[i] == '\n';
+}
+
+static void test_rx_events_per_byte_bounded(void **state)
+{
+	static const uint8_t pick[] = {FRAME_SYNC, FRAME_SYNC, '\n', '\r', 0x00, 0x01, 0x08, 0x40};
+	uint8_t buf[FRAME_REQ_MAX], d[FRAME_REQ_MAX];
+	frame_rx_t rx;
+	uint32_t rng = 12345;
+	unsigned most = 0;
+
+	(void)state;
+	frame_rx_init(&rx, buf, FRAME_REQ_PAYLOAD_MAX, count_frame, count_endings, NULL);
+	for (int i = 0; i < 400000; i++) {
+		size_t held = rx.n;
+		uint8_t b;
+
+		rng = rng * 1103515245u + 12345u;
+		b = (rng >> 16) % 4 ? pick[(rng >> 20) % sizeof(pick)] : (uint8_t)(rng >> 24);
+		EVENTS = 0;
+		frame_rx_feed(&rx, &b, 1, 0);
+		assert_true(EVENTS <= held + 1);
+		if (EVENTS > most)
+			most = EVENTS;
+		if (i % 997 == 0) {
+			held = rx.n;
+			EVENTS = 0;
+			frame_rx_poll(&rx, FRAME_RX_TIMEOUT_MS);
+			assert_true(EVENTS <= held);
+		}
+	}
+	assert_true(most > 1);
+	/* The worst: a damaged frame of the largest length whose bytes after
+	 * the length are all line endings. Its last byte causes the NAK and
+	 * 68 line endings, with 70 bytes held before it. */
+	frame_rx_init(&rx, buf, FRAME_REQ_PAYLOAD_MAX, count_frame, count_endings, NULL);
+	d[0] = FRAME_SYNC;
+	d[1] = FRAME_REQ_PAYLOAD_MAX;
+	d[2] = 0;
+	memset(d + 3, '\n', sizeof(d) - 3);
+	assert_int_not_equal(cmd_crc16(0xFFFF, d + 1, FRAME_HDR - 1 + FRAME_REQ_PAYLOAD_MAX),
+			     0x0A0A);
+	EVENTS = 0;
+	frame_rx_feed(&rx, d, sizeof(d) - 1, 0);
+	assert_int_equal(EVENTS, 0);
+	assert_int_equal(rx.n, sizeof(d) - 1);
+	frame_rx_feed(&rx, d + sizeof(d) - 1, 1, 0);
+	assert_int_equal(EVENTS, 1 + sizeof(d) - 3);
+	assert_int_equal(rx.st.crc_errors, 1);
+	assert_false(frame_rx_busy(&rx));
+}
+
 /* The unit's server: NAKs, duplicate detection. */
 static sim_t S;
 static uint8_t OUT[4096];
@@ -578,6 +648,7 @@ int main(void)
 	    cmocka_unit_test(test_rx_oversize_and_truncated),
 	    cmocka_unit_test(test_rx_random_bytes_never_overrun),
 	    cmocka_unit_test(test_rx_hold_keeps_sync_in_other),
+	    cmocka_unit_test(test_rx_events_per_byte_bounded),
 	    cmocka_unit_test(test_server_naks_echo_seq),
 	    cmocka_unit_test(test_server_duplicates),
 	    cmocka_unit_test(test_doc_opcode_table),

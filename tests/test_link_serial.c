@@ -35,6 +35,7 @@
 #include "../proto/server.h"
 
 static sim_t S;
+static server_serial_t SER;
 static int MASTER = -1, SLAVE = -1;
 static pthread_t TH;
 static pthread_mutex_t MU = PTHREAD_MUTEX_INITIALIZER;
@@ -63,12 +64,17 @@ static size_t m_write(void *ctx, const uint8_t *b, size_t n)
 	return r > 0 ? (size_t)r : 0;
 }
 
+/* Set, the unit's link clock stands still (no frame times out): a test
+ * whose host writes a frame in pieces then depends on no wall-clock gap. */
+static volatile int FROZEN;
+static uint32_t FROZEN_US;
+
 static void *unit_thread(void *arg)
 {
 	(void)arg;
 	while (RUN) {
 		pthread_mutex_lock(&MU);
-		server_poll(&S.srv, (uint32_t)(mono_ms() * 1000u));
+		server_poll(&S.srv, FROZEN ? FROZEN_US : (uint32_t)(mono_ms() * 1000u));
 		sim_tick(&S);
 		pthread_mutex_unlock(&MU);
 		usleep(100);
@@ -83,6 +89,7 @@ static int setup(void **state)
 	vs_link_t io = {m_read, m_write, &MASTER};
 
 	(void)state;
+	FROZEN = 0;
 	vs_config_defaults(&cfg);
 	/* Time passes in lockstep waits with no request; the link watchdog
 	 * has its own tests. */
@@ -97,7 +104,7 @@ static int setup(void **state)
 	if (tty_set_raw(SLAVE, 115200) != 0 || tty_set_raw(MASTER, 0) != 0)
 		return -1;
 	fcntl(MASTER, F_SETFL, fcntl(MASTER, F_GETFL) | O_NONBLOCK);
-	server_attach_serial(&S.srv, &io);
+	server_serve_serial(&S.srv, &SER, &io);
 	RUN = 1;
 	return pthread_create(&TH, NULL, unit_thread, NULL) == 0 ? 0 : -1;
 }
@@ -125,6 +132,59 @@ static void host_write(const void *p, size_t n)
 		assert_true(k > 0);
 		b += k;
 		n -= (size_t)k;
+	}
+}
+
+/* Writes while discarding what the unit answers, as a host that sends more
+ * than the unit's answers to it can wait for must (flow control). */
+static void host_flood(const void *p, size_t n)
+{
+	const uint8_t *b = p;
+	uint8_t junk[4096];
+	uint32_t end = mono_ms() + 30000;
+	int fl = fcntl(SLAVE, F_GETFL);
+
+	fcntl(SLAVE, F_SETFL, fl | O_NONBLOCK);
+	while (n) {
+		struct pollfd pf = {SLAVE, POLLIN | POLLOUT, 0};
+		ssize_t k;
+
+		assert_true(mono_ms() < end);
+		if (poll(&pf, 1, 100) <= 0)
+			continue;
+		if ((pf.revents & POLLIN) && read(SLAVE, junk, sizeof(junk)) < 0)
+			assert_int_equal(errno, EAGAIN);
+		if ((pf.revents & POLLOUT) && (k = write(SLAVE, b, n)) > 0) {
+			b += k;
+			n -= (size_t)k;
+		}
+	}
+	fcntl(SLAVE, F_SETFL, fl);
+}
+
+/* Reads and discards what the unit answers for at least ms, and until the
+ * unit has taken every byte written (a poll of its ended with the port
+ * empty) and sent every answer. */
+static void host_settle(unsigned ms)
+{
+	uint8_t junk[4096];
+	uint32_t t0 = mono_ms(), end = t0 + 30000, polls0;
+	bool done = false;
+
+	pthread_mutex_lock(&MU);
+	polls0 = SER.st.polls;
+	pthread_mutex_unlock(&MU);
+	while (!done || mono_ms() - t0 < ms) {
+		struct pollfd pf = {SLAVE, POLLIN, 0};
+
+		assert_true(mono_ms() < end);
+		if (poll(&pf, 1, 10) > 0 && read(SLAVE, junk, sizeof(junk)) > 0)
+			continue;
+		/* a poll that began after the last byte was written */
+		pthread_mutex_lock(&MU);
+		done = SER.st.polls - polls0 >= 2 && SER.in_at == SER.in_len && !SER.more &&
+		       !SER.blocked && SER.q_len == 0;
+		pthread_mutex_unlock(&MU);
 	}
 }
 
@@ -440,8 +500,8 @@ static void test_bad_input(void **state)
 	srand(4242);
 	for (size_t i = 0; i < 8192; i++)
 		junk[i] = (uint8_t)rand();
-	host_write(junk, 8192);
-	usleep(150000);
+	host_flood(junk, 8192);
+	host_settle(150);
 	/* bad CRC */
 	{
 		size_t k = frame_encode(f, sizeof(f), 1, CMD_OP_moveForward,
@@ -474,11 +534,11 @@ static void test_bad_input(void **state)
 	/* a flood at full rate: 64 KiB of sync-rich garbage with no line end */
 	for (size_t i = 0; i < sizeof(junk); i++)
 		junk[i] = (uint8_t)(i % 5 == 0 ? FRAME_SYNC : rand());
-	host_write(junk, sizeof(junk));
-	usleep(250000);
+	host_flood(junk, sizeof(junk));
+	host_settle(250);
 	/* a line end closes whatever the console collected */
 	host_write("\n", 1);
-	usleep(50000);
+	host_settle(50);
 	host_drain();
 
 	pthread_mutex_lock(&MU);
@@ -507,6 +567,547 @@ static void test_bad_input(void **state)
 	assert_int_equal(vc_getPosition(&C, &r, &pos), VC_OK);
 	assert_true(fabs(pos.x - 300.0) < 0.0005);
 	vc_close(&C);
+}
+
+/* ---- flow control over the pty ------------------------------------------ */
+
+/* What came back, in the order it came: frames and console lines, each
+ * checked against the one answer getIFVersion has. */
+enum { PIPE_N = 6000 };
+typedef struct {
+	int kind; /* 1 frame, 2 console line */
+	uint8_t seq, op;
+	bool good;
+} ev_t;
+static ev_t EV[PIPE_N + 1];
+static size_t NEV;
+static char EVLINE[1100];
+static size_t EVLINE_N;
+static const char IFV[] = "RTC VehicleService interface: ver.2.0.0";
+
+static ev_t *ev_next(void)
+{
+	return &EV[NEV < PIPE_N ? NEV++ : (NEV = PIPE_N + 1, PIPE_N)];
+}
+
+static void ev_frame(void *ctx, const frame_t *f)
+{
+	ev_t *e = ev_next();
+
+	(void)ctx;
+	e->kind = 1;
+	e->seq = f->seq;
+	e->op = f->op;
+	e->good = f->status == WIRE_ST_OK && f->len == 3 + sizeof(IFV) - 1 &&
+		  f->payload[0] == WIRE_ST_OK && f->payload[1] == 1 &&
+		  f->payload[2] == sizeof(IFV) - 1 &&
+		  memcmp(f->payload + 3, IFV, sizeof(IFV) - 1) == 0;
+}
+
+static void ev_other(void *ctx, const uint8_t *d, size_t n)
+{
+	(void)ctx;
+	for (size_t i = 0; i < n; i++) {
+		if (d[i] == '\n') {
+			char want[80];
+			ev_t *e = ev_next();
+
+			snprintf(want, sizeof(want), "ok true \"%s\"", IFV);
+			EVLINE[EVLINE_N] = '\0';
+			e->kind = 2;
+			e->good = strcmp(EVLINE, want) == 0;
+			EVLINE_N = 0;
+		} else if (EVLINE_N < sizeof(EVLINE) - 1) {
+			EVLINE[EVLINE_N++] = (char)d[i];
+		}
+	}
+}
+
+/* Request i of the pipeline: every 8th a console line, the others frames
+ * with sequence number i (mod 256), all getIFVersion. */
+static size_t pipeline(uint8_t *buf, size_t cap)
+{
+	size_t n = 0;
+
+	for (unsigned i = 0; i < PIPE_N; i++) {
+		if (i % 8 == 7) {
+			assert_true(cap - n >= 13);
+			memcpy(buf + n, "getIFVersion\n", 13);
+			n += 13;
+		} else {
+			size_t k = frame_encode(buf + n, cap - n, (uint8_t)i, CMD_OP_getIFVersion,
+						NULL, 0);
+
+			assert_int_not_equal(k, 0);
+			n += k;
+		}
+	}
+	return n;
+}
+
+/* Requests run by the unit so far: frames and console lines. */
+static uint32_t unit_ran(void)
+{
+	uint32_t n;
+
+	pthread_mutex_lock(&MU);
+	n = S.srv.serial.fs.st.executed + S.srv.con.lines;
+	pthread_mutex_unlock(&MU);
+	return n;
+}
+
+/* 6,000 requests pipelined (frames and console lines), not read until the
+ * unit stops taking them, then read: the unit ran only what it could
+ * answer (its answers waiting, the rest left in the port), and in the end
+ * every request has exactly one whole answer, in order, none dropped. */
+static void test_pipelined_flow_control(void **state)
+{
+	static uint8_t req[PIPE_N * FRAME_OVERHEAD + PIPE_N / 8 * 13];
+	uint8_t rxbuf[FRAME_RESP_MAX];
+	frame_rx_t rx;
+	size_t len, sent = 0;
+	uint32_t ran0, ran, end;
+	int fl;
+
+	(void)state;
+	host_drain();
+	len = pipeline(req, sizeof(req));
+	ran0 = unit_ran();
+	pthread_mutex_lock(&MU);
+	/* The host writes frames in pieces as the port takes them. */
+	FROZEN_US = (uint32_t)(mono_ms() * 1000u);
+	FROZEN = 1;
+	pthread_mutex_unlock(&MU);
+	fl = fcntl(SLAVE, F_GETFL);
+	fcntl(SLAVE, F_SETFL, fl | O_NONBLOCK);
+
+	/* Not reading: write until the unit leaves the rest in the port. */
+	end = mono_ms() + 30000;
+	for (bool blocked = false; !blocked;) {
+		ssize_t k = sent < len ? write(SLAVE, req + sent, len - sent) : 0;
+
+		if (k > 0) {
+			sent += (size_t)k;
+			continue;
+		}
+		assert_true(k == 0 || errno == EAGAIN);
+		assert_true(mono_ms() < end);
+		usleep(1000);
+		pthread_mutex_lock(&MU);
+		blocked = SER.blocked;
+		pthread_mutex_unlock(&MU);
+	}
+	/* It stopped as soon as more than the backlog of answers waited
+	 * (49 bytes a frame's, 50 a line's), and takes nothing more. */
+	ran = unit_ran() - ran0;
+	assert_true(ran < PIPE_N);
+	pthread_mutex_lock(&MU);
+	assert_true(SER.q_len > SERVER_SERIAL_BACKLOG);
+	assert_true(SER.q_len <= SERVER_SERIAL_BACKLOG + 50);
+	assert_int_equal(S.srv.serial.port.dropped, 0);
+	pthread_mutex_unlock(&MU);
+	usleep(200000);
+	assert_int_equal(unit_ran() - ran0, ran);
+
+	/* Reading now, and writing the rest as the port takes it. */
+	NEV = 0;
+	EVLINE_N = 0;
+	frame_rx_init(&rx, rxbuf, FRAME_RESP_PAYLOAD_MAX, ev_frame, ev_other, NULL);
+	while (NEV < PIPE_N) {
+		struct pollfd pf = {SLAVE, (short)(POLLIN | (sent < len ? POLLOUT : 0)), 0};
+		uint8_t b[4096];
+		ssize_t k;
+
+		assert_true(mono_ms() < end);
+		if (poll(&pf, 1, 100) <= 0)
+			continue;
+		if ((pf.revents & POLLIN) && (k = read(SLAVE, b, sizeof(b))) > 0)
+			frame_rx_feed(&rx, b, (size_t)k, 0);
+		if ((pf.revents & POLLOUT) && (k = write(SLAVE, req + sent, len - sent)) > 0)
+			sent += (size_t)k;
+	}
+	/* and nothing after the last */
+	{
+		struct pollfd pf = {SLAVE, POLLIN, 0};
+
+		assert_int_equal(poll(&pf, 1, 200), 0);
+	}
+	fcntl(SLAVE, F_SETFL, fl);
+	FROZEN = 0;
+	assert_int_equal(sent, len);
+	assert_int_equal(NEV, PIPE_N);
+	for (unsigned i = 0; i < PIPE_N; i++) {
+		if (!EV[i].good || EV[i].kind != (i % 8 == 7 ? 2 : 1) ||
+		    (EV[i].kind == 1 &&
+		     (EV[i].seq != (uint8_t)i || EV[i].op != (0x80 | CMD_OP_getIFVersion))))
+			fail_msg("answer %u: kind %d seq %u op 0x%02X good %d", i, EV[i].kind,
+				 EV[i].seq, EV[i].op, EV[i].good);
+	}
+	assert_int_equal(rx.st.crc_errors + rx.st.oversize + rx.st.truncated, 0);
+	assert_int_equal(unit_ran() - ran0, PIPE_N);
+	pthread_mutex_lock(&MU);
+	assert_int_equal(S.srv.serial.port.dropped, 0);
+	assert_int_equal(S.srv.serial.fs.st.naks, 0);
+	assert_true(SER.st.room_stops > 0);
+	assert_int_equal(SER.q_len, 0);
+	pthread_mutex_unlock(&MU);
+}
+
+/* ---- the budget per poll, on a port of no speed limit ------------------- */
+
+/* A port as fast as memory: everything the host sent is there at once, and
+ * it takes every answer, or none while full. The unit is polled by the test
+ * alone, its clock standing (no frame times out). */
+typedef struct {
+	const uint8_t *in;
+	size_t in_len, in_at;
+	uint8_t out[1 << 20];
+	size_t out_len;
+	bool full;
+} fport_t;
+
+static fport_t FP;
+static sim_t F;
+static server_serial_t FSER;
+
+static size_t fp_read(void *ctx, uint8_t *b, size_t max)
+{
+	fport_t *p = ctx;
+	size_t k = p->in_len - p->in_at < max ? p->in_len - p->in_at : max;
+
+	memcpy(b, p->in + p->in_at, k);
+	p->in_at += k;
+	return k;
+}
+
+static size_t fp_write(void *ctx, const uint8_t *b, size_t n)
+{
+	fport_t *p = ctx;
+
+	if (p->full)
+		return 0;
+	assert_true(p->out_len + n <= sizeof(p->out));
+	memcpy(p->out + p->out_len, b, n);
+	p->out_len += n;
+	return n;
+}
+
+static int fake_setup(void **state)
+{
+	vs_config_t cfg;
+	plant_params_t pp;
+	vs_link_t io = {fp_read, fp_write, &FP};
+
+	(void)state;
+	vs_config_defaults(&cfg);
+	cfg.link_timeout_ms = 0;
+	plant_params_default(&pp);
+	memset(&FP, 0, sizeof(FP));
+	if (sim_init(&F, &cfg, &pp) != 0)
+		return -1;
+	server_serve_serial(&F.srv, &FSER, &io);
+	return 0;
+}
+
+static uint32_t f_executed(void)
+{
+	return F.srv.serial.fs.st.executed;
+}
+
+/* Polls until the unit has taken every byte and the port every answer. */
+static void f_settle(void)
+{
+	for (int p = 0; FP.in_at < FP.in_len || FSER.in_at < FSER.in_len || FSER.q_len ||
+			server_serial_more(&F.srv) || server_serial_blocked(&F.srv);
+	     p++) {
+		assert_true(p < 100000);
+		server_poll(&F.srv, 0);
+	}
+}
+
+/* n frames of op with payload p (seq 0, 1, ...) into buf. */
+static size_t frames(uint8_t *buf, size_t cap, unsigned n, uint8_t op, const void *p, size_t plen)
+{
+	size_t len = 0;
+
+	for (unsigned i = 0; i < n; i++) {
+		size_t k = frame_encode(buf + len, cap - len, (uint8_t)i, op, p, plen);
+
+		assert_int_not_equal(k, 0);
+		len += k;
+	}
+	return len;
+}
+
+/* The answers on the port: n frames, seq 0, 1, ..., each of op and size. */
+static void check_answers(unsigned n, uint8_t op, size_t size)
+{
+	size_t at = 0;
+
+	for (unsigned i = 0; i < n; i++) {
+		const uint8_t *a = FP.out + at;
+
+		assert_true(at + size <= FP.out_len);
+		assert_int_equal(a[0], FRAME_SYNC);
+		assert_int_equal(wire_get_u16(a + 1), size - FRAME_OVERHEAD);
+		assert_int_equal(a[3], (uint8_t)i);
+		assert_int_equal(a[4], 0x80 | op);
+		assert_int_equal(a[5], WIRE_ST_OK);
+		assert_int_equal(wire_get_u16(a + size - 2), cmd_crc16(0xFFFF, a + 1, size - 3));
+		at += size;
+	}
+	assert_int_equal(at, FP.out_len);
+}
+
+/* getState frames flooding in: 8 run a poll, each answered whole (21 bytes:
+ * true 25 "Unpowered"), and of the port's bytes only what the unit reads at
+ * once (256) is taken ahead; the rest waits in the port. */
+static void test_budget_requests(void **state)
+{
+	enum { N = 1000 };
+	static uint8_t in[N * FRAME_OVERHEAD];
+	unsigned polls = 0;
+
+	(void)state;
+	FP.in = in;
+	FP.in_len = frames(in, sizeof(in), N, CMD_OP_getState, NULL, 0);
+	server_poll(&F.srv, 0);
+	assert_int_equal(f_executed(), 8);
+	assert_int_equal(FP.out_len, 8 * 21);
+	assert_int_equal(FP.in_at, SERVER_SERIAL_IN);
+	assert_true(server_serial_more(&F.srv));
+	for (polls = 1; f_executed() < N; polls++) {
+		server_poll(&F.srv, 0);
+		assert_int_equal(f_executed(), 8 * (polls + 1));
+	}
+	assert_int_equal(polls, N / 8);
+	server_poll(&F.srv, 0);
+	assert_false(server_serial_more(&F.srv));
+	assert_int_equal(FSER.st.max_answers, 8);
+	assert_int_equal(FSER.st.budget_stops, N / 8);
+	assert_int_equal(FSER.st.room_stops, 0);
+	assert_int_equal(F.srv.serial.port.dropped, 0);
+	check_answers(N, CMD_OP_getState, 21);
+}
+
+/* getActiveAlarm 16 with 11 alarms of 50-byte sources: 628-byte answers,
+ * whose bytes bound a poll first: 7 a poll (4,396 bytes; six were 3,768,
+ * under 4,096). */
+static void test_budget_answer_bytes(void **state)
+{
+	enum { N = 700 };
+	static uint8_t in[N * (FRAME_OVERHEAD + 2)];
+	const uint8_t count[2] = {16, 0};
+
+	(void)state;
+	for (int k = 0; k < 11; k++) {
+		char src[51];
+
+		memset(src, 'a' + k, 50);
+		src[50] = '\0';
+		alarm_raise(&F.vehicle.alarms, (uint32_t)(100 + k), src);
+	}
+	FP.in = in;
+	FP.in_len = frames(in, sizeof(in), N, CMD_OP_getActiveAlarm, count, 2);
+	for (unsigned p = 1; p <= N / 7; p++) {
+		server_poll(&F.srv, 0);
+		assert_int_equal(f_executed(), 7 * p);
+		assert_int_equal(FP.out_len, 7 * 628 * p);
+	}
+	assert_int_equal(FSER.st.max_answers, 7);
+	assert_int_equal(FSER.st.max_bytes, 7 * 628);
+	check_answers(N, CMD_OP_getActiveAlarm, 628);
+}
+
+/* Comments get no answer: 64 KiB of them are bounded by the bytes a poll
+ * reads, 8 KiB. */
+static void test_budget_bytes_read(void **state)
+{
+	static uint8_t in[64 * 1024];
+
+	(void)state;
+	for (size_t i = 0; i < sizeof(in); i += 64) {
+		memset(in + i, 'c', 63);
+		memcpy(in + i, "# ", 2);
+		in[i + 63] = '\n';
+	}
+	FP.in = in;
+	FP.in_len = sizeof(in);
+	for (unsigned p = 1; p <= 8; p++) {
+		server_poll(&F.srv, 0);
+		assert_int_equal(FP.in_at, SERVER_SERIAL_RX_PER_POLL * p);
+		assert_true(server_serial_more(&F.srv));
+	}
+	server_poll(&F.srv, 0);
+	assert_false(server_serial_more(&F.srv));
+	assert_int_equal(FP.out_len, 0);
+	assert_int_equal(F.srv.con.lines, 0);
+}
+
+/* A port that takes nothing: the unit runs requests while at most 4,096
+ * bytes of answers wait, 196 getState (195 x 21 = 4,095), and then leaves
+ * the rest in the port: of its 7,000 bytes it read 1,536 (six reads of 256
+ * for the 1,372 bytes of 196 frames). When the port takes again, every
+ * request is answered whole and in order. */
+static void test_flow_port_full(void **state)
+{
+	enum { N = 1000 };
+	static uint8_t in[N * FRAME_OVERHEAD];
+
+	(void)state;
+	FP.full = true;
+	FP.in = in;
+	FP.in_len = frames(in, sizeof(in), N, CMD_OP_getState, NULL, 0);
+	for (int p = 0; p < 100; p++)
+		server_poll(&F.srv, 0);
+	assert_int_equal(f_executed(), 196);
+	assert_int_equal(FSER.q_len, 196 * 21);
+	assert_int_equal(FP.in_at, 1536);
+	assert_true(server_serial_blocked(&F.srv));
+	assert_false(server_serial_more(&F.srv));
+	assert_int_equal(server_serial_queued(&F.srv), 196 * 21);
+	assert_int_equal(FSER.st.room_stops, 100 - 24);
+	FP.full = false;
+	f_settle();
+	assert_int_equal(f_executed(), N);
+	assert_int_equal(F.srv.serial.port.dropped, 0);
+	check_answers(N, CMD_OP_getState, 21);
+}
+
+/* The most one byte can cause: the byte that completes a damaged frame
+ * whose bytes, read again, hold ten "$help" lines. Taken with 4,032 bytes
+ * already waiting (192 answers, the backlog not exceeded), its twelve
+ * answers (the NAK, error 7 for the length bytes' line, ten $help replies)
+ * go into the queue whole, over the backlog and the poll's budget; then
+ * nothing more is taken until the port takes them. */
+static void test_flow_damaged_frame(void **state)
+{
+	enum { N = 192 };
+	static uint8_t in[N * FRAME_OVERHEAD + 128];
+	uint8_t *d;
+	char help[CONSOLE_REPLY_MAX], err7[64];
+	size_t len, hl, want;
+	uint16_t crc;
+
+	(void)state;
+	assert_true(sim_exec(&F, "$help", help, sizeof(help)));
+	hl = strlen(help) + 1;
+	snprintf(err7, sizeof(err7), "error %d binary data in line\n", CONSOLE_E_BINARY);
+	len = frames(in, sizeof(in), N, CMD_OP_getState, NULL, 0);
+	/* A5, length 64 ("@" NUL), seq '\n', op '$', "help\n" and nine
+	 * "$help\n", "    \n", then a check that is not the frame's ("xy") */
+	d = in + len;
+	d[0] = FRAME_SYNC;
+	memcpy(d + 1, "@\0\n$help\n", 9);
+	for (int k = 0; k < 9; k++)
+		memcpy(d + 10 + 6 * k, "$help\n", 6);
+	memcpy(d + 64, "    \nxy", 7);
+	crc = cmd_crc16(0xFFFF, d + 1, 4 + 64);
+	assert_int_not_equal(crc, wire_get_u16((const uint8_t *)"xy"));
+	len += 71;
+	in[len++] = '\n'; /* ends the line "xy" */
+	len += frame_encode(in + len, sizeof(in) - len, 200, CMD_OP_getState, NULL, 0);
+	FP.in = in;
+	FP.in_len = len;
+	FP.full = true;
+	for (int p = 0; p < 40; p++)
+		server_poll(&F.srv, 0);
+	want = N * 21 + FRAME_OVERHEAD + 1 + strlen(err7) + 10 * hl;
+	assert_int_equal(FSER.q_len, want);
+	assert_int_equal(F.srv.serial.port.dropped, 0);
+	assert_int_equal(FSER.st.max_answers, 12);
+	assert_true(server_serial_blocked(&F.srv));
+	assert_int_equal(f_executed(), N);
+	/* the port takes again: the rest, then the line "xy" and the frame */
+	FP.full = false;
+	f_settle();
+	{
+		const uint8_t *o = FP.out + N * 21;
+		uint8_t nak[FRAME_OVERHEAD + 1];
+		char tail[CONSOLE_REPLY_MAX * 12];
+		size_t tl = 0;
+
+		assert_int_equal(
+		    frame_encode_response(nak, sizeof(nak), '\n', 0, WIRE_ST_CRC, NULL, 0),
+		    sizeof(nak));
+		assert_memory_equal(o, nak, sizeof(nak));
+		o += sizeof(nak);
+		tl += (size_t)snprintf(tail + tl, sizeof(tail) - tl, "%s", err7);
+		for (int k = 0; k < 10; k++)
+			tl += (size_t)snprintf(tail + tl, sizeof(tail) - tl, "%s\n", help);
+		tl += (size_t)snprintf(tail + tl, sizeof(tail) - tl,
+				       "error %d unknown operation xy\n", CONSOLE_E_UNKNOWN_OP);
+		assert_memory_equal(o, tail, tl);
+		o += tl;
+		assert_int_equal(FP.out + FP.out_len - o, 21);
+		assert_int_equal(o[3], 200);
+	}
+	assert_int_equal(f_executed(), N + 1);
+	assert_int_equal(F.srv.serial.port.dropped, 0);
+}
+
+/* ---- long comments on vehicle-sim's consoles ----------------------------- */
+
+static void start_sim(void);
+static void sim_line(const char *line, const char *want);
+static void stop_sim(void);
+static int sim_teardown(void **state);
+
+/* Runs cmd in a shell; its stdout in out. */
+static void run_capture(const char *cmd, char *out, size_t cap)
+{
+	FILE *f = popen(cmd, "r");
+	size_t n;
+
+	assert_non_null(f);
+	n = fread(out, 1, cap - 1, f);
+	out[n] = '\0';
+	assert_int_equal(pclose(f), 0);
+}
+
+/* A comment longer than a line (300 bytes) gets no reply on every console
+ * of vehicle-sim: stdin (--fast), stdin beside the port (--pty --fast), and
+ * the port. Replies on stdin beside the port are whole up to 1,023 bytes
+ * ($config's list, over 511, where they were cut). */
+static void test_sim_long_comment(void **state)
+{
+	char comment[301], path[64], cmd[1200], want[2048], out[4096], cfg[CONSOLE_REPLY_MAX];
+	FILE *f;
+
+	(void)state;
+	memset(comment, 'x', 300);
+	memcpy(comment, "# ", 2);
+	comment[300] = '\0';
+	assert_true(sim_exec(&F, "$config", cfg, sizeof(cfg)));
+	assert_true(strlen(cfg) > 511); /* was cut at 511 */
+	snprintf(want, sizeof(want), "ok true 25 \"Unpowered\"\n%s\n", cfg);
+	snprintf(path, sizeof(path), "/tmp/vslc-%d.txt", (int)getpid());
+	f = fopen(path, "w");
+	assert_non_null(f);
+	fprintf(f, "%s\ngetState\n   %s\r\n$config\n", comment, comment);
+	fclose(f);
+
+	snprintf(cmd, sizeof(cmd),
+		 "%s/vehicle-sim --fast --config config/vehicle.xml --io config/io.xml "
+		 "< %s 2>/dev/null",
+		 BUILD_DIR, path);
+	run_capture(cmd, out, sizeof(out));
+	assert_string_equal(out, want);
+
+	snprintf(cmd, sizeof(cmd),
+		 "%s/vehicle-sim --pty --fast --config config/vehicle.xml --io config/io.xml "
+		 "< %s 2>/dev/null",
+		 BUILD_DIR, path);
+	run_capture(cmd, out, sizeof(out));
+	assert_memory_equal(out, "/dev/", 5);
+	assert_non_null(strchr(out, '\n'));
+	assert_string_equal(strchr(out, '\n') + 1, want);
+	unlink(path);
+
+	start_sim();
+	snprintf(cmd, sizeof(cmd), "%s\ngetState\n", comment);
+	sim_line(cmd, "ok true 25 \"Unpowered\"\n");
+	stop_sim();
 }
 
 /* Client-side failures: a silent unit is a timeout with retries, not a hang. */
@@ -891,6 +1492,13 @@ int main(int argc, char **argv)
 	    cmocka_unit_test_setup_teardown(test_console_client, setup, teardown),
 	    cmocka_unit_test_setup_teardown(test_retransmission_runs_once, setup, teardown),
 	    cmocka_unit_test_setup_teardown(test_bad_input, setup, teardown),
+	    cmocka_unit_test_setup_teardown(test_pipelined_flow_control, setup, teardown),
+	    cmocka_unit_test_setup(test_budget_requests, fake_setup),
+	    cmocka_unit_test_setup(test_budget_answer_bytes, fake_setup),
+	    cmocka_unit_test_setup(test_budget_bytes_read, fake_setup),
+	    cmocka_unit_test_setup(test_flow_port_full, fake_setup),
+	    cmocka_unit_test_setup(test_flow_damaged_frame, fake_setup),
+	    cmocka_unit_test_setup_teardown(test_sim_long_comment, fake_setup, sim_teardown),
 	    cmocka_unit_test(test_client_timeout),
 	    cmocka_unit_test(test_vehiclectl),
 	    cmocka_unit_test_teardown(test_link_watchdog_host_killed, sim_teardown),

@@ -24,6 +24,7 @@
 #include "../hal/linux/joystick.h"
 #include <linux/input.h>
 #include "../proto/client/client.h"
+#include "../proto/frame.h"
 
 #define VEHICLE_HEAD                                                                               \
 	"<vehicle kinematics=\"differential\" tick_hz=\"100\">\n"                                  \
@@ -578,6 +579,83 @@ static void test_fw_link_and_sigterm_mid_move(void **state)
 	MASTER = -1;
 }
 
+/* The serial link under a pipelined burst, as a host on a port of no speed
+ * limit sends it: 2,000 getState frames written as fast as the port takes
+ * them and not read for half a second, then read (the rest written
+ * meanwhile). Every request gets exactly one whole answer, in order, none
+ * dropped: the unit leaves what it cannot answer in the port, where a host
+ * that only wrote would wait. Before that, a comment longer than a line
+ * gets no reply. */
+static void test_fw_pipelined_and_long_comment(void **state)
+{
+	enum { N = 2000, ANS = 21 }; /* true 25 "Unpowered" */
+	static uint8_t req[N * FRAME_OVERHEAD], ans[N * ANS];
+	char reply[512], comment[301], want[256];
+	size_t len = 0, got = 0;
+
+	(void)state;
+	write_fw_config();
+	start_fw();
+	fw_sleep_ms(200);
+	memset(comment, 'x', 300);
+	memcpy(comment, "# ", 2);
+	comment[300] = '\n';
+	assert_int_equal(write(MASTER, comment, 301), 301);
+	console("getBatteryVoltage", reply, sizeof(reply));
+	assert_string_equal(reply, "ok true 235.000");
+
+	for (unsigned i = 0; i < N; i++)
+		len += frame_encode(req + len, sizeof(req) - len, (uint8_t)i, CMD_OP_getState, NULL,
+				    0);
+	int fl = fcntl(MASTER, F_GETFL);
+	size_t sent = 0;
+	fcntl(MASTER, F_SETFL, fl | O_NONBLOCK);
+	for (int t = 0; t < 50; t++) {
+		ssize_t k = write(MASTER, req + sent, len - sent);
+		if (k > 0)
+			sent += (size_t)k;
+		fw_sleep_ms(10);
+	}
+	while (got < sizeof(ans)) {
+		struct pollfd p = {.fd = MASTER,
+				   .events = (short)(POLLIN | (sent < len ? POLLOUT : 0))};
+		assert_int_equal(poll(&p, 1, 5000), 1);
+		ssize_t k;
+		if ((p.revents & POLLIN) && (k = read(MASTER, ans + got, sizeof(ans) - got)) > 0)
+			got += (size_t)k;
+		if ((p.revents & POLLOUT) && (k = write(MASTER, req + sent, len - sent)) > 0)
+			sent += (size_t)k;
+	}
+	fcntl(MASTER, F_SETFL, fl);
+	for (unsigned i = 0; i < N; i++) {
+		const uint8_t *a = ans + i * ANS;
+		const uint8_t head[] = {FRAME_SYNC,
+					ANS - FRAME_OVERHEAD,
+					0,
+					(uint8_t)i,
+					0x80 | CMD_OP_getState,
+					WIRE_ST_OK,
+					1,
+					25,
+					0,
+					9};
+		assert_memory_equal(a, head, sizeof(head));
+		assert_memory_equal(a + sizeof(head), "Unpowered", 9);
+		assert_int_equal(wire_get_u16(a + ANS - 2), cmd_crc16(0xFFFF, a + 1, ANS - 3));
+	}
+	/* nothing more, and the counters: the bytes of three lines (301, 18,
+	 * 6) went to the console */
+	console("$link", reply, sizeof(reply));
+	snprintf(want, sizeof(want),
+		 "ok frames %d executed %d duplicates 0 naks 0 crc 0 oversize 0 truncated 0 "
+		 "other %d txdrop 0",
+		 N, N, 301 + 18 + 6);
+	assert_string_equal(reply, want);
+	assert_int_equal(stop_fw(), 0);
+	close(MASTER);
+	MASTER = -1;
+}
+
 /* SIGTERM while idle and unpowered: a clean exit without a deceleration. */
 static void test_fw_sigterm_idle(void **state)
 {
@@ -641,6 +719,7 @@ int main(int argc, char **argv)
 	const struct CMUnitTest process[] = {
 	    cmocka_unit_test_teardown(test_fw_link_and_sigterm_mid_move, teardown),
 	    cmocka_unit_test_teardown(test_fw_sigterm_idle, teardown),
+	    cmocka_unit_test_teardown(test_fw_pipelined_and_long_comment, teardown),
 	    cmocka_unit_test_teardown(test_fw_bad_config, teardown),
 	};
 	bool proc = argc > 1 && strcmp(argv[1], "--process") == 0;

@@ -46,7 +46,8 @@ typedef struct {
 	lhal_t hal;
 	vs_hal_t vh;
 	vs_server_t srv;
-	sockcan_t can; /* --can: the CAN command link's socket and state */
+	server_serial_t ser; /* the serial link's budget, flow control and answers */
+	sockcan_t can;	     /* --can: the CAN command link's socket and state */
 	canlink_t canlink;
 	int in_fd, out_fd;
 	uint32_t write_errors;
@@ -374,7 +375,7 @@ static int open_links(app_t *a, const opts_t *o)
 	}
 	server_init(&a->srv, &a->v, rt_extra, a, NULL, NULL);
 	vs_link_t lio = {port_read, port_write, a};
-	server_attach_serial(&a->srv, &lio);
+	server_serve_serial(&a->srv, &a->ser, &lio);
 
 	a->can.fd = -1;
 	if (!o->can_iface)
