@@ -97,9 +97,13 @@ static int observe(void)
 		vm_watchdog(&fired, true);
 		vm_watchdog(&M, same_alarms(&fired, codes, n));
 	}
-	/* Not in position (154) is the plant's physics: the model takes it. */
+	/* Not in position (154) is the plant's physics: the model takes it;
+	 * so is a following error (204) while pushes are being taken back. */
 	if (n > 0 && codes[0] == 154 && (M.nalarm == 0 || M.alarm[0] != 154))
 		vm_refused(&M, 154);
+	if (n > 0 && codes[0] == 204 && M.settle_left_ms > 0 &&
+	    (M.nalarm == 0 || M.alarm[0] != 204))
+		vm_plant_fault(&M, 204);
 	if (!same_alarms(&M, codes, n)) {
 		char a[128], b[128];
 		alarms_text(a, sizeof a, M.alarm, M.nalarm);

@@ -471,6 +471,11 @@ void vm_refused(vm_t *m, uint32_t code)
 	raise(m, code);
 }
 
+void vm_plant_fault(vm_t *m, uint32_t code)
+{
+	fault(m, code);
+}
+
 /* ---- inputs and time ---- */
 
 void vm_input(vm_t *m, vm_input_t in, bool on)

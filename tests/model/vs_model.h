@@ -112,6 +112,9 @@ void vm_apply(vm_t *m, const vm_call_t *call, bool reply);
 /* The warning a refusal raised (one of m->refuse), or an alarm the plant's
  * physics may raise at any time (154, not in position). */
 void vm_refused(vm_t *m, uint32_t code);
+/* A fault the plant's physics raised (204: pushes piled up past the
+ * following-error bound before the hold took them back). */
+void vm_plant_fault(vm_t *m, uint32_t code);
 /* The link watchdog's time came while the host motion may already have
  * ended (vm_t.wd_open): the unit's alarm list says whether it fired. */
 void vm_watchdog(vm_t *m, bool fired);
