@@ -21,15 +21,15 @@
  * not know it (the firmware then goes by .enabled alone). */
 typedef enum {
 	HAL_DRIVE_UNKNOWN = 0,
-	HAL_DRIVE_NOT_READY,	     /* Not ready to switch on */
+	HAL_DRIVE_NOT_READY,	      /* Not ready to switch on */
 	HAL_DRIVE_SWITCH_ON_DISABLED, /* Switch on disabled */
-	HAL_DRIVE_READY,	     /* Ready to switch on */
-	HAL_DRIVE_SWITCHED_ON,	     /* Switched on: power stage off (an STO holds it here) */
-	HAL_DRIVE_ENABLED,	     /* Operation enabled */
-	HAL_DRIVE_QUICK_STOP,	     /* Quick stop active */
-	HAL_DRIVE_FAULT_REACTION,    /* Fault reaction active */
-	HAL_DRIVE_FAULT,	     /* Fault */
-	HAL_DRIVE_NOT_OPERATIONAL,   /* its communication is not operational (NMT) */
+	HAL_DRIVE_READY,	      /* Ready to switch on */
+	HAL_DRIVE_SWITCHED_ON,	      /* Switched on: power stage off (an STO holds it here) */
+	HAL_DRIVE_ENABLED,	      /* Operation enabled */
+	HAL_DRIVE_QUICK_STOP,	      /* Quick stop active */
+	HAL_DRIVE_FAULT_REACTION,     /* Fault reaction active */
+	HAL_DRIVE_FAULT,	      /* Fault */
+	HAL_DRIVE_NOT_OPERATIONAL,    /* its communication is not operational (NMT) */
 	HAL_DRIVE_STATE_COUNT
 } hal_drive_phase_t;
 
@@ -40,8 +40,8 @@ typedef struct {
 	 * Operation enabled and 0x6061 confirmed; Modbus: the status bit). Never
 	 * a copy of the command: the firmware's servo on waits for it. */
 	bool enabled;
-	bool fresh;	     /* a reply arrived since the previous read */
-	uint8_t phase;	     /* hal_drive_phase_t */
+	bool fresh;    /* a reply arrived since the previous read */
+	uint8_t phase; /* hal_drive_phase_t */
 	/* The drive restarted (or its count jumped in a way the backend cannot
 	 * bridge) since the previous read: position_counts no longer continues
 	 * the old count. Reported on one read; the firmware latches it and
