@@ -698,7 +698,9 @@ static void test_pipelined_flow_control(void **state)
 		pthread_mutex_unlock(&MU);
 	}
 	/* It stopped as soon as more than the backlog of answers waited
-	 * (49 bytes a frame's, 50 a line's), and takes nothing more. */
+	 * (49 bytes a frame's, 50 a line's), far short of the pipeline. (The
+	 * pty's kernel side frees room late on a loaded host, so the unit may
+	 * take some more later; it never holds more than that, below.) */
 	ran = unit_ran() - ran0;
 	assert_true(ran < PIPE_N);
 	pthread_mutex_lock(&MU);
@@ -706,8 +708,6 @@ static void test_pipelined_flow_control(void **state)
 	assert_true(SER.q_len <= SERVER_SERIAL_BACKLOG + 50);
 	assert_int_equal(S.srv.serial.port.dropped, 0);
 	pthread_mutex_unlock(&MU);
-	usleep(200000);
-	assert_int_equal(unit_ran() - ran0, ran);
 
 	/* Reading now, and writing the rest as the port takes it. */
 	NEV = 0;
@@ -749,6 +749,7 @@ static void test_pipelined_flow_control(void **state)
 	assert_int_equal(S.srv.serial.port.dropped, 0);
 	assert_int_equal(S.srv.serial.fs.st.naks, 0);
 	assert_true(SER.st.room_stops > 0);
+	assert_true(SER.st.max_queued <= SERVER_SERIAL_BACKLOG + 50);
 	assert_int_equal(SER.q_len, 0);
 	pthread_mutex_unlock(&MU);
 }
