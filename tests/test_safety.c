@@ -264,6 +264,26 @@ static void test_stop_ends_pause(void **state)
 	EXPECT("getState", "ok true 16 \"Ready\"");
 }
 
+/* Found by the differential harness: stop during a jog with a route
+ * queued behind it drops the route too (it ran once the jog had braked). */
+static void test_stop_in_jog_drops_queued_route(void **state)
+{
+	(void)state;
+	ready();
+	EXPECT("moveJog 200 0 0", "ok true");
+	EXPECT("moveLinearAbs 1000 0 0", "ok true");
+	sim_run_ms(&S, 100);
+	EXPECT("stop", "ok true");
+	sim_run_ms(&S, 900);
+	EXPECT("getState", "ok true 16 \"Ready\"");
+	double x0 = odom_x();
+	sim_run_ms(&S, 900);
+	assert_true(fabs(odom_x() - x0) < 0.1);
+	/* A stop at rest refuses nothing sent next. */
+	EXPECT("stop", "ok true");
+	EXPECT("moveJog 100 0 0", "ok true");
+}
+
 /* 11: drive 0's power stage held off (an STO): servo on waits, the other
  * wheel never drives, and 500 ms on it is fault 211 naming drive 0 and its
  * state. */
@@ -354,6 +374,7 @@ int main(void)
 	    cmocka_unit_test_setup(test_hold_is_bounded, setup_diff),
 	    cmocka_unit_test_setup(test_mecanum_speed_is_a_vector, setup_omni),
 	    cmocka_unit_test_setup(test_stop_ends_pause, setup_diff),
+	    cmocka_unit_test_setup(test_stop_in_jog_drops_queued_route, setup_diff),
 	    cmocka_unit_test_setup(test_servo_on_waits_for_every_drive, setup_diff),
 	    cmocka_unit_test_setup(test_drive_leaving_enabled_stops_all, setup_diff),
 	    cmocka_unit_test_setup(test_drive_restart_loses_position, setup_diff),
