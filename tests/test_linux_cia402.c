@@ -168,6 +168,24 @@ static void test_statusword(void **state)
 	assert_true(co_state_is_fault(CO_ST_FAULT));
 	assert_true(co_state_is_fault(CO_ST_FAULT_REACTION));
 	assert_false(co_state_is_fault(CO_ST_QUICK_STOP));
+	/* the HAL's names of the same states */
+	static const struct {
+		co_state_t st;
+		uint8_t ph;
+	} h[] = {
+	    {CO_ST_UNKNOWN, HAL_DRIVE_UNKNOWN},
+	    {CO_ST_NOT_READY, HAL_DRIVE_NOT_READY},
+	    {CO_ST_SWITCH_ON_DISABLED, HAL_DRIVE_SWITCH_ON_DISABLED},
+	    {CO_ST_READY, HAL_DRIVE_READY},
+	    {CO_ST_SWITCHED_ON, HAL_DRIVE_SWITCHED_ON},
+	    {CO_ST_OP_ENABLED, HAL_DRIVE_ENABLED},
+	    {CO_ST_QUICK_STOP, HAL_DRIVE_QUICK_STOP},
+	    {CO_ST_FAULT_REACTION, HAL_DRIVE_FAULT_REACTION},
+	    {CO_ST_FAULT, HAL_DRIVE_FAULT},
+	    {(co_state_t)99, HAL_DRIVE_UNKNOWN},
+	};
+	for (size_t i = 0; i < sizeof(h) / sizeof(h[0]); i++)
+		assert_int_equal(co_hal_phase(h[i].st), h[i].ph);
 }
 
 static void test_controlword(void **state)
@@ -237,16 +255,20 @@ static void test_pdo_nmt_frames(void **state)
 
 	uint16_t sw = 0;
 	int32_t pos = 0;
-	f = mk(0x181, "3702FFFFFF7F");
-	assert_true(co_tpdo1_decode(&f, &sw, &pos));
+	int8_t mode = 0;
+	f = mk(0x181, "3702FFFFFF7F03");
+	assert_true(co_tpdo1_decode(&f, &sw, &pos, &mode));
 	assert_int_equal(sw, 0x0237);
 	assert_int_equal(pos, INT32_MAX);
+	assert_int_equal(mode, 3);
 	f = mk(0x181, "18020000008099");
-	assert_true(co_tpdo1_decode(&f, &sw, &pos));
+	assert_true(co_tpdo1_decode(&f, &sw, &pos, &mode));
 	assert_int_equal(sw, 0x0218);
 	assert_int_equal(pos, INT32_MIN);
-	f = mk(0x181, "3702000000");
-	assert_false(co_tpdo1_decode(&f, &sw, &pos));
+	assert_int_equal(mode, -103); /* 0x99: a manufacturer's mode, signed */
+	/* statusword and position without the mode display: too short */
+	f = mk(0x181, "370200000000");
+	assert_false(co_tpdo1_decode(&f, &sw, &pos, &mode));
 }
 
 static void test_emcy_decode(void **state)
@@ -313,7 +335,8 @@ static void test_config_list(void **state)
 	    "601#2F001A0000000000", /* no objects mapped */
 	    "601#23001A0110004160", /* 1st: statusword */
 	    "601#23001A0220006460", /* 2nd: position actual value */
-	    "601#2F001A0002000000", /* two objects */
+	    "601#23001A0308006160", /* 3rd: modes of operation display */
+	    "601#2F001A0003000000", /* three objects */
 	    "601#2F00180201000000", /* on every SYNC */
 	    "601#2300180181010000", /* TPDO1 valid on 0x181 */
 	    "601#2B17100064000000", /* heartbeat every 100 ms */
@@ -334,15 +357,15 @@ static void test_config_list(void **state)
 	c = (co_cfg_t){
 	    .heartbeat_ms = 50, .master_node = 127, .consumer_ms = 300, .profile_accel = 200000};
 	n = co_config_list(&c, 2, r);
-	assert_int_equal(n, 22);
+	assert_int_equal(n, 23);
 	canlink_frame_t f;
-	co_sdo_request_frame(&f, 2, &r[18]);
-	assert_frame(&f, "602#2B17100032000000");
 	co_sdo_request_frame(&f, 2, &r[19]);
-	assert_frame(&f, "602#231610012C017F00");
+	assert_frame(&f, "602#2B17100032000000");
 	co_sdo_request_frame(&f, 2, &r[20]);
-	assert_frame(&f, "602#23836000400D0300");
+	assert_frame(&f, "602#231610012C017F00");
 	co_sdo_request_frame(&f, 2, &r[21]);
+	assert_frame(&f, "602#23836000400D0300");
+	co_sdo_request_frame(&f, 2, &r[22]);
 	assert_frame(&f, "602#23846000400D0300");
 }
 
@@ -390,7 +413,7 @@ static int fk_send(void *ctx, const canlink_frame_t *f)
 	}
 	for (unsigned n = 1; f->id == CO_ID_SYNC && !FK.no_tpdo && n < 128; n++)
 		if (FK.started[n])
-			push(mk(0x180u + n, "400200000000"));
+			push(mk(0x180u + n, "40020000000003"));
 	if (f->id > 0x600 && f->id <= 0x67F) {
 		uint16_t idx = (uint16_t)(f->data[1] | f->data[2] << 8);
 		canlink_frame_t r = {.id = f->id - 0x80u, .dlc = 8};
@@ -439,6 +462,8 @@ static int fk_wait(void *ctx, int timeout_ms)
 }
 
 static co_bus_t BUS;
+/* The modes of operation display that feed() sends for nodes 1, 2. */
+static int8_t MODE[2] = {3, 3};
 
 static bk_canopen_bus_t test_cfg(uint32_t master)
 {
@@ -448,7 +473,8 @@ static bk_canopen_bus_t test_cfg(uint32_t master)
 				  .heartbeat_timeout_ms = 300,
 				  .sdo_timeout_ms = 5,
 				  .boot_timeout_ms = 20,
-				  .master_node = master};
+				  .master_node = master,
+				  .fault_reset_ms = 200};
 }
 
 /* Answering drives on a working transport. */
@@ -459,7 +485,11 @@ static void fake_reset(void)
 	FK.respond = true;
 	FK.device_type = 0x00020192;
 	FK.abort_index = FK.silent_index = 0xFFFF;
+	MODE[0] = MODE[1] = 3;
 }
+
+/* Polarity of axes 0, 1 for the next start (reset after it). */
+static bool REVERSE[2];
 
 /* Drives with these node ids on axes 0, 1, ... */
 static int start_nodes(uint32_t master, const uint8_t *nodes, unsigned n, char *err, size_t len)
@@ -467,7 +497,8 @@ static int start_nodes(uint32_t master, const uint8_t *nodes, unsigned n, char *
 	bk_canopen_bus_t cfg = test_cfg(master);
 	co_bus_init(&BUS, 0, &cfg);
 	for (unsigned i = 0; i < n; i++)
-		assert_int_equal(co_bus_add(&BUS, (uint8_t)i, nodes[i]), i);
+		assert_int_equal(co_bus_add(&BUS, (uint8_t)i, nodes[i], i < 2 && REVERSE[i]), i);
+	memset(REVERSE, 0, sizeof(REVERSE));
 	BUS.io = (co_io_t){fk_send, fk_recv, fk_wait, NULL};
 	return co_bus_start(&BUS, err, len);
 }
@@ -512,27 +543,27 @@ static void test_bus_startup_sequence(void **state)
 	char err[256] = "";
 	assert_int_equal(bus_start(0, err, sizeof(err)), 0);
 	assert_string_equal(err, "");
-	/* reset communication for each, 19 SDO each, start each, one SYNC */
-	assert_int_equal(FK.ntx, 2 + 19 + 19 + 2 + 1);
+	/* reset communication for each, 20 SDO each, start each, one SYNC */
+	assert_int_equal(FK.ntx, 2 + 20 + 20 + 2 + 1);
 	assert_frame(&FK.tx[0], "000#8201");
 	assert_frame(&FK.tx[1], "000#8202");
 	assert_frame(&FK.tx[2], "601#4000100000000000");
 	assert_frame(&FK.tx[5], "601#2F60600003000000");
-	assert_frame(&FK.tx[20], "601#2B17100064000000");
-	assert_frame(&FK.tx[21], "602#4000100000000000");
-	assert_frame(&FK.tx[24], "602#2F60600003000000");
-	assert_frame(&FK.tx[40], "000#0101");
-	assert_frame(&FK.tx[41], "000#0102");
-	assert_frame(&FK.tx[42], "080#");
+	assert_frame(&FK.tx[21], "601#2B17100064000000");
+	assert_frame(&FK.tx[22], "602#4000100000000000");
+	assert_frame(&FK.tx[25], "602#2F60600003000000");
+	assert_frame(&FK.tx[42], "000#0101");
+	assert_frame(&FK.tx[43], "000#0102");
+	assert_frame(&FK.tx[44], "080#");
 	/* the first tick starts from the positions of that SYNC */
 	assert_true(BUS.d[0].have_status);
 	assert_int_equal(BUS.d[1].status, 0x0240);
 	assert_true(BUS.started);
 	assert_int_equal(BUS.d[0].phase, CO_PHASE_RUN);
-	/* with the master's heartbeat: consumed by each drive, 20 SDO each */
+	/* with the master's heartbeat: consumed by each drive, 21 SDO each */
 	assert_int_equal(bus_start(127, err, sizeof(err)), 0);
-	assert_int_equal(FK.ntx, 2 + 20 + 20 + 2 + 1);
-	assert_frame(&FK.tx[21], "601#231610012C017F00");
+	assert_int_equal(FK.ntx, 2 + 21 + 21 + 2 + 1);
+	assert_frame(&FK.tx[22], "601#231610012C017F00");
 }
 
 static void test_bus_startup_errors(void **state)
@@ -633,15 +664,17 @@ static void tick(uint32_t now_us, char *out, size_t len)
 
 static void feed(uint16_t sw1, int32_t pos1, uint16_t sw2, int32_t pos2, bool hb)
 {
-	canlink_frame_t f = {.id = 0x181, .dlc = 6};
+	canlink_frame_t f = {.id = 0x181, .dlc = 7};
 	f.data[0] = (uint8_t)sw1;
 	f.data[1] = (uint8_t)(sw1 >> 8);
 	memcpy(f.data + 2, &pos1, 4); /* little-endian host */
+	f.data[6] = (uint8_t)MODE[0];
 	push(f);
 	f.id = 0x182;
 	f.data[0] = (uint8_t)sw2;
 	f.data[1] = (uint8_t)(sw2 >> 8);
 	memcpy(f.data + 2, &pos2, 4);
+	f.data[6] = (uint8_t)MODE[1];
 	push(f);
 	if (hb) {
 		push(mk(0x701, "05"));
@@ -678,25 +711,48 @@ static void test_bus_tick_enable_sequence(void **state)
 	assert_true(st.fresh);
 	assert_int_equal(st.position_counts, -5);
 
+	/* Enabled with a setpoint: the velocity stays 0 until the drive
+	 * reports Operation enabled (no step as its stage comes on). */
 	co_drive_enable(&BUS, 0, true);
 	co_drive_set_velocity(&BUS, 0, 256 * 1000 + 128);
 	feed(0x0240, 100, 0x0240, -5, false);
 	tick(3000, out, sizeof(out));
-	assert_string_equal(out, "201#0600E9030000 202#060000000000 080#");
+	assert_string_equal(out, "201#060000000000 202#060000000000 080#");
+	co_drive_read(&BUS, 0, &st);
+	assert_false(st.enabled); /* the command alone enables nothing */
+	assert_int_equal(st.phase, HAL_DRIVE_SWITCH_ON_DISABLED);
 	feed(0x0231, 100, 0x0231, -5, false);
 	tick(4000, out, sizeof(out));
-	assert_string_equal(out, "201#0700E9030000 202#060000000000 080#");
+	assert_string_equal(out, "201#070000000000 202#060000000000 080#");
+	co_drive_read(&BUS, 0, &st);
+	assert_false(st.enabled);
+	assert_int_equal(st.phase, HAL_DRIVE_READY);
 	feed(0x0233, 100, 0x0231, -5, false);
 	tick(5000, out, sizeof(out));
-	assert_string_equal(out, "201#0F00E9030000 202#060000000000 080#");
+	assert_string_equal(out, "201#0F0000000000 202#060000000000 080#");
+	co_drive_read(&BUS, 0, &st);
+	assert_false(st.enabled);
+	assert_int_equal(st.phase, HAL_DRIVE_SWITCHED_ON);
 	feed(0x0237, 110, 0x0231, -5, false);
-	co_drive_set_velocity(&BUS, 0, -256 * 20);
 	tick(6000, out, sizeof(out));
+	assert_string_equal(out, "201#0F00E9030000 202#060000000000 080#");
+	co_drive_set_velocity(&BUS, 0, -256 * 20);
+	feed(0x0237, 110, 0x0231, -5, false);
+	tick(6500, out, sizeof(out));
 	assert_string_equal(out, "201#0F00ECFFFFFF 202#060000000000 080#");
 	co_drive_read(&BUS, 0, &st);
 	assert_true(st.fresh);
 	assert_true(st.enabled);
+	assert_int_equal(st.phase, HAL_DRIVE_ENABLED);
 	assert_int_equal(st.position_counts, 110);
+	/* the drive drops to switched on by itself (an STO): reported at
+	 * once, and the setpoint is 0 again while the master still asks */
+	feed(0x0233, 110, 0x0231, -5, false);
+	tick(6800, out, sizeof(out));
+	assert_string_equal(out, "201#0F0000000000 202#060000000000 080#");
+	co_drive_read(&BUS, 0, &st);
+	assert_false(st.enabled);
+	assert_int_equal(st.phase, HAL_DRIVE_SWITCHED_ON);
 	/* disabled by the firmware: shutdown, velocity 0 */
 	co_drive_enable(&BUS, 0, false);
 	feed(0x0237, 110, 0x0231, -5, false);
@@ -792,23 +848,42 @@ static void test_bus_emcy_fault_and_reset(void **state)
 				 "E5\n");
 	assert_int_equal(BUS.emcy, 1);
 
-	/* fault reset: 0x80 once (rising edge), the code reads 0 meanwhile */
+	/* fault reset: bit 7 rises and is held while the drive stays in
+	 * fault, the code reads 0 meanwhile; at the bound (200 ms from the
+	 * request at 5000) it is low again and the fault is reported again */
 	co_drive_reset_fault(&BUS, 0);
 	co_drive_read(&BUS, 0, &st);
 	assert_int_equal(st.fault_code, 0);
+	assert_int_equal(st.phase, HAL_DRIVE_FAULT);
 	feed(0x0218, 0, 0x0237, 0, false);
 	tick(6000, out, sizeof(out));
 	assert_string_equal(out, "201#800000000000 202#060000000000 080#");
 	feed(0x0218, 0, 0x0237, 0, false);
 	tick(7000, out, sizeof(out));
-	assert_string_equal(out, "201#000000000000 202#060000000000 080#");
+	assert_string_equal(out, "201#800000000000 202#060000000000 080#");
 	co_drive_read(&BUS, 0, &st);
 	assert_int_equal(st.fault_code, 0);
-	/* still in fault after the grace time: reported again */
 	feed(0x0218, 0, 0x0237, 0, false);
-	tick(6000 + CO_RESET_GRACE_US, out, sizeof(out));
+	tick(5000 + 200000 - 1, out, sizeof(out));
+	assert_string_equal(out, "201#800000000000 202#060000000000 080#");
+	co_drive_read(&BUS, 0, &st);
+	assert_int_equal(st.fault_code, 0);
+	feed(0x0218, 0, 0x0237, 0, false);
+	tick(5000 + 200000, out, sizeof(out));
+	assert_string_equal(out, "201#000000000000 202#060000000000 080#");
 	co_drive_read(&BUS, 0, &st);
 	assert_int_equal(st.fault_code, 0x2310);
+	/* a new request: low for that SYNC, so this is a new rising edge */
+	co_drive_reset_fault(&BUS, 0);
+	feed(0x0218, 0, 0x0237, 0, false);
+	tick(206000, out, sizeof(out));
+	assert_string_equal(out, "201#800000000000 202#060000000000 080#");
+	/* the drive leaves fault: the bit drops with the first statusword
+	 * that says so */
+	feed(0x0240, 0, 0x0237, 0, false);
+	tick(207000, out, sizeof(out));
+	assert_string_equal(out, "201#060000000000 202#060000000000 080#");
+	assert_false(BUS.d[0].reset_req);
 	/* out of fault: the code is forgotten; a fault without EMCY: generic */
 	feed(0x0240, 0, 0x0237, 0, false);
 	tick(300000, out, sizeof(out));
@@ -858,24 +933,32 @@ static void test_bus_restarted_drive(void **state)
 	assert_string_equal(out, "601#4000100000000000 202#060000000000 080#");
 	co_drive_read(&BUS, 0, &st);
 	assert_false(st.fresh);
+	assert_false(st.position_lost); /* with the first sample, not before */
+	assert_int_equal(st.phase, HAL_DRIVE_NOT_OPERATIONAL);
 	uint32_t t = 4000;
-	for (unsigned i = 1; i < 19; i++, t += 1000) {
+	for (unsigned i = 1; i < 20; i++, t += 1000) {
 		tick(t, out, sizeof(out));
 		assert_int_equal(strncmp(out, "601#", 4), 0);
 	}
 	assert_string_equal(out, "601#2B17100064000000 202#060000000000 080#");
 	tick(t, out, sizeof(out));
 	assert_string_equal(out, "000#0101 201#060000000000 202#060000000000 080#");
-	/* its position continues from the last one reported */
+	/* its position continues from the last one reported, and the first
+	 * sample says the position is lost, once */
 	feed(0x0240, 0, 0x0240, 0, false);
 	push(mk(0x701, "05"));
 	tick(t + 1000, out, sizeof(out));
 	co_drive_read(&BUS, 0, &st);
 	assert_true(st.fresh);
+	assert_true(st.position_lost);
 	assert_int_equal(st.position_counts, 1000);
+	co_drive_read(&BUS, 1, &st);
+	assert_false(st.position_lost); /* the other drive did not restart */
 	feed(0x0240, 25, 0x0240, 0, false);
 	tick(t + 2000, out, sizeof(out));
 	co_drive_read(&BUS, 0, &st);
+	assert_true(st.fresh);
+	assert_false(st.position_lost);
 	assert_int_equal(st.position_counts, 1025);
 	assert_int_equal(BUS.d[0].restarts, 1);
 
@@ -920,6 +1003,362 @@ static void test_bus_restarted_drive(void **state)
 		 "ms\n"
 		 "vehicle-fw: error: canopen bus 0 (vcan9): node 1 (axis 0): lost: no heartbeat "
 		 "for more than 300 ms\n");
+}
+
+/* 0x6061 must confirm profile velocity before the drive counts as enabled:
+ * otherwise it is held switched on (0x07), gets velocity 0, reads not
+ * enabled, and the reason is logged once per occurrence. */
+static void test_bus_mode_not_confirmed(void **state)
+{
+	(void)state;
+	char err[256], out[512], log[2048];
+	hal_drive_state_t st;
+	assert_int_equal(bus_start(0, err, sizeof(err)), 0);
+	FK.respond = false;
+	tick(1000, out, sizeof(out));
+	MODE[0] = 1; /* profile position */
+	co_drive_enable(&BUS, 0, true);
+	co_drive_set_velocity(&BUS, 0, 256 * 500);
+	capture();
+	feed(0x0233, 7, 0x0240, 0, true);
+	tick(2000, out, sizeof(out));
+	assert_string_equal(out, "201#070000000000 202#060000000000 080#");
+	feed(0x0233, 7, 0x0240, 0, false);
+	tick(3000, out, sizeof(out));
+	assert_string_equal(out, "201#070000000000 202#060000000000 080#");
+	co_drive_read(&BUS, 0, &st);
+	assert_true(st.fresh);
+	assert_false(st.enabled);
+	assert_int_equal(st.phase, HAL_DRIVE_SWITCHED_ON);
+	/* in Operation enabled by some other hand, still mode 1: disable
+	 * operation, not enabled, no velocity */
+	feed(0x0237, 7, 0x0240, 0, false);
+	tick(4000, out, sizeof(out));
+	assert_string_equal(out, "201#070000000000 202#060000000000 080#");
+	co_drive_read(&BUS, 0, &st);
+	assert_false(st.enabled);
+	assert_int_equal(st.phase, HAL_DRIVE_ENABLED);
+	/* the mode confirms: enable operation, then enabled, then velocity */
+	MODE[0] = 3;
+	feed(0x0233, 7, 0x0240, 0, false);
+	tick(5000, out, sizeof(out));
+	assert_string_equal(out, "201#0F0000000000 202#060000000000 080#");
+	co_drive_read(&BUS, 0, &st);
+	assert_false(st.enabled);
+	feed(0x0237, 7, 0x0240, 0, false);
+	tick(6000, out, sizeof(out));
+	assert_string_equal(out, "201#0F00F4010000 202#060000000000 080#");
+	co_drive_read(&BUS, 0, &st);
+	assert_true(st.enabled);
+	/* it changes under way: not enabled at once, logged again */
+	MODE[0] = 0;
+	feed(0x0237, 7, 0x0240, 0, false);
+	tick(7000, out, sizeof(out));
+	assert_string_equal(out, "201#070000000000 202#060000000000 080#");
+	co_drive_read(&BUS, 0, &st);
+	assert_false(st.enabled);
+	assert_int_equal(st.phase, HAL_DRIVE_ENABLED);
+	captured(log, sizeof(log));
+	assert_string_equal(log, "vehicle-fw: warning: canopen bus 0 (vcan9): node 1 (axis 0): "
+				 "modes of operation display 0x6061 reads 1, not 3 (profile "
+				 "velocity): held switched on, not enabled\n"
+				 "vehicle-fw: warning: canopen bus 0 (vcan9): node 1 (axis 0): "
+				 "modes of operation display 0x6061 reads 0, not 3 (profile "
+				 "velocity): held switched on, not enabled\n");
+}
+
+/* A heartbeat that says stopped: not operational, not enabled whatever
+ * the last statusword said, and velocity 0. */
+static void test_bus_not_operational(void **state)
+{
+	(void)state;
+	char err[256], out[512];
+	hal_drive_state_t st;
+	assert_int_equal(bus_start(0, err, sizeof(err)), 0);
+	FK.respond = false;
+	tick(1000, out, sizeof(out));
+	co_drive_enable(&BUS, 1, true);
+	co_drive_set_velocity(&BUS, 1, 256 * 100);
+	feed(0x0240, 0, 0x0237, 0, true);
+	tick(2000, out, sizeof(out));
+	assert_string_equal(out, "201#060000000000 202#0F0064000000 080#");
+	co_drive_read(&BUS, 1, &st);
+	assert_true(st.enabled);
+	assert_int_equal(st.phase, HAL_DRIVE_ENABLED);
+	feed(0x0240, 0, 0x0237, 0, false);
+	push(mk(0x702, "04"));
+	tick(3000, out, sizeof(out));
+	assert_string_equal(out, "201#060000000000 202#0F0000000000 080#");
+	co_drive_read(&BUS, 1, &st);
+	assert_false(st.fresh);
+	assert_false(st.enabled);
+	assert_int_equal(st.phase, HAL_DRIVE_NOT_OPERATIONAL);
+	co_drive_read(&BUS, 0, &st);
+	assert_int_equal(st.phase, HAL_DRIVE_SWITCH_ON_DISABLED);
+	/* operational again: its statusword counts again */
+	feed(0x0240, 0, 0x0237, 0, false);
+	push(mk(0x702, "05"));
+	tick(4000, out, sizeof(out));
+	assert_string_equal(out, "201#060000000000 202#0F0064000000 080#");
+	co_drive_read(&BUS, 1, &st);
+	assert_true(st.fresh);
+	assert_true(st.enabled);
+	assert_int_equal(st.phase, HAL_DRIVE_ENABLED);
+}
+
+/* Node 1's heartbeat says hb (boot-up or pre-operational) at now_us: it
+ * is configured again, one SDO per tick, and started; returns the time of
+ * the tick after NMT start. */
+static uint32_t reconfigure_node1(uint32_t now_us, const char *hb)
+{
+	char out[512];
+	hal_drive_state_t st;
+	FK.respond = true;
+	FK.no_tpdo = true; /* the test feeds the TPDOs itself */
+	push(mk(0x701, hb));
+	for (unsigned i = 0; i < 20; i++, now_us += 1000) {
+		tick(now_us, out, sizeof(out));
+		assert_int_equal(strncmp(out, "601#", 4), 0);
+		co_drive_read(&BUS, 0, &st);
+		assert_false(st.fresh);
+		assert_false(st.enabled);
+		assert_false(st.position_lost);
+		assert_int_equal(st.phase, HAL_DRIVE_NOT_OPERATIONAL);
+	}
+	tick(now_us, out, sizeof(out));
+	assert_string_equal(out, "000#0101 201#060000000000 202#060000000000 080#");
+	FK.respond = false;
+	return now_us + 1000;
+}
+
+/* A drive that drops to pre-operational by itself (its heartbeat consumer
+ * timed out) and comes back without restarting keeps its count: what it
+ * travelled meanwhile stays in the position. Only a boot-up message
+ * re-bases the count and reports the position lost, once. */
+static void test_bus_comeback_keeps_count(void **state)
+{
+	(void)state;
+	char err[256], out[512], log[2048];
+	hal_drive_state_t st;
+	assert_int_equal(bus_start(0, err, sizeof(err)), 0);
+	FK.respond = false;
+	tick(1000, out, sizeof(out));
+	feed(0x0240, 1000, 0x0240, 0, true);
+	tick(2000, out, sizeof(out));
+	co_drive_read(&BUS, 0, &st);
+	assert_int_equal(st.position_counts, 1000);
+	capture();
+	/* it leaves operational by itself: configured again, no re-base */
+	uint32_t t = reconfigure_node1(3000, "7F");
+	/* the wheel went on 61 counts while nobody watched */
+	feed(0x0240, 1061, 0x0240, 0, false);
+	push(mk(0x701, "05"));
+	tick(t, out, sizeof(out));
+	co_drive_read(&BUS, 0, &st);
+	assert_true(st.fresh);
+	assert_false(st.position_lost);
+	assert_int_equal(st.position_counts, 1061);
+	assert_int_equal(st.phase, HAL_DRIVE_SWITCH_ON_DISABLED);
+	/* now it really restarts: its count starts over at 0, the reported
+	 * one goes on from 1061 and says lost, on one read */
+	t = reconfigure_node1(t + 1000, "00");
+	feed(0x0240, 0, 0x0240, 0, false);
+	push(mk(0x701, "05"));
+	tick(t, out, sizeof(out));
+	co_drive_read(&BUS, 0, &st);
+	assert_true(st.fresh);
+	assert_true(st.position_lost);
+	assert_int_equal(st.position_counts, 1061);
+	feed(0x0240, 40, 0x0240, 0, false);
+	tick(t + 1000, out, sizeof(out));
+	co_drive_read(&BUS, 0, &st);
+	assert_false(st.position_lost);
+	assert_int_equal(st.position_counts, 1101);
+	/* and leaves operational again: the offset of the restart stays, the
+	 * drive's 0x6064 goes on from 40 to 95 */
+	push(mk(0x701, "05"));
+	tick(t + 2000, out, sizeof(out));
+	t = reconfigure_node1(t + 3000, "7F");
+	feed(0x0240, 95, 0x0240, 0, false);
+	push(mk(0x701, "05"));
+	tick(t, out, sizeof(out));
+	co_drive_read(&BUS, 0, &st);
+	assert_true(st.fresh);
+	assert_false(st.position_lost);
+	assert_int_equal(st.position_counts, 1156);
+	assert_int_equal(BUS.d[0].restarts, 3);
+	captured(log, sizeof(log));
+	assert_non_null(strstr(log, "vehicle-fw: warning: canopen bus 0 (vcan9): node 1 (axis 0): "
+				    "pre-operational after operational: configuring it again\n"));
+	assert_non_null(strstr(log,
+			       "vehicle-fw: warning: canopen bus 0 (vcan9): node 1 (axis 0): "
+			       "boot-up message (the drive restarted): configuring it again\n"));
+}
+
+/* Polarity reverse: the master negates velocity and position itself. */
+static void test_bus_polarity(void **state)
+{
+	(void)state;
+	char err[256], out[512];
+	hal_drive_state_t st;
+	fake_reset();
+	static const uint8_t two[] = {1, 2};
+	REVERSE[0] = true;
+	assert_int_equal(start_nodes(0, two, 2, err, sizeof(err)), 0);
+	FK.respond = false;
+	tick(1000, out, sizeof(out));
+	co_drive_enable(&BUS, 0, true);
+	co_drive_enable(&BUS, 1, true);
+	co_drive_set_velocity(&BUS, 0, 256 * 1000);
+	co_drive_set_velocity(&BUS, 1, 256 * 1000);
+	feed(0x0237, 1000, 0x0237, 1000, true);
+	tick(2000, out, sizeof(out));
+	assert_string_equal(out, "201#0F0018FCFFFF 202#0F00E8030000 080#");
+	co_drive_read(&BUS, 0, &st);
+	assert_int_equal(st.position_counts, -1000);
+	co_drive_read(&BUS, 1, &st);
+	assert_int_equal(st.position_counts, 1000);
+	/* the count wraps as the drive's does */
+	feed(0x0237, INT32_MIN, 0x0237, INT32_MIN, false);
+	co_drive_set_velocity(&BUS, 0, -256 * 7);
+	tick(3000, out, sizeof(out));
+	assert_string_equal(out, "201#0F0007000000 202#0F00E8030000 080#");
+	co_drive_read(&BUS, 0, &st);
+	assert_int_equal(st.position_counts, INT32_MIN);
+	feed(0x0237, INT32_MIN + 1, 0x0237, 0, false);
+	tick(4000, out, sizeof(out));
+	co_drive_read(&BUS, 0, &st);
+	assert_int_equal(st.position_counts, INT32_MAX);
+}
+
+/* A reset requested during the fault reaction waits for Fault, then rises
+ * and is held; the request bound runs from the request. */
+static void test_bus_fault_reset_waits_reaction(void **state)
+{
+	(void)state;
+	char err[256], out[512];
+	hal_drive_state_t st;
+	assert_int_equal(bus_start(0, err, sizeof(err)), 0);
+	FK.respond = false;
+	tick(1000, out, sizeof(out));
+	feed(0x021F, 0, 0x0240, 0, true);
+	tick(2000, out, sizeof(out));
+	co_drive_read(&BUS, 0, &st);
+	assert_int_equal(st.fault_code, CO_GENERIC_FAULT);
+	assert_int_equal(st.phase, HAL_DRIVE_FAULT_REACTION);
+	co_drive_reset_fault(&BUS, 0);
+	feed(0x021F, 0, 0x0240, 0, false);
+	tick(3000, out, sizeof(out));
+	assert_string_equal(out, "201#000000000000 202#060000000000 080#");
+	co_drive_read(&BUS, 0, &st);
+	assert_int_equal(st.fault_code, 0);
+	for (uint32_t t = 4000; t <= 6000; t += 1000) {
+		feed(0x0218, 0, 0x0240, 0, false);
+		tick(t, out, sizeof(out));
+		assert_string_equal(out, "201#800000000000 202#060000000000 080#");
+	}
+	feed(0x0240, 0, 0x0240, 0, false);
+	tick(7000, out, sizeof(out));
+	assert_string_equal(out, "201#060000000000 202#060000000000 080#");
+	co_drive_read(&BUS, 0, &st);
+	assert_int_equal(st.fault_code, 0);
+	assert_int_equal(st.phase, HAL_DRIVE_SWITCH_ON_DISABLED);
+	/* a drive that stays in fault reaction past the bound (200 ms from
+	 * the request at 7000): never a rising edge into the reaction, and
+	 * the fault reads again at the bound */
+	feed(0x021F, 0, 0x0240, 0, false);
+	tick(7500, out, sizeof(out));
+	co_drive_reset_fault(&BUS, 0);
+	feed(0x021F, 0, 0x0240, 0, false);
+	tick(7500 + 199999, out, sizeof(out));
+	assert_string_equal(out, "201#000000000000 202#060000000000 080#");
+	co_drive_read(&BUS, 0, &st);
+	assert_int_equal(st.fault_code, 0);
+	feed(0x021F, 0, 0x0240, 0, false);
+	tick(7500 + 200000, out, sizeof(out));
+	co_drive_read(&BUS, 0, &st);
+	assert_int_equal(st.fault_code, CO_GENERIC_FAULT);
+	assert_false(BUS.d[0].reset_req);
+}
+
+/* <backends>: one <drive> per axis, the polarity and the fault reset
+ * bound (the rest of the parser: tests/test_linux_fw.c). */
+static void load_backends(const char *body, backend_cfg_t *b, char *err, size_t len, int want)
+{
+	char path[] = "/tmp/vscfgXXXXXX";
+	int fd = mkstemp(path);
+	assert_true(fd >= 0);
+	FILE *f = fdopen(fd, "w");
+	assert_non_null(f);
+	fprintf(f,
+		"<vehicle kinematics=\"differential\" tick_hz=\"100\">\n"
+		"  <devices contact_sensor=\"false\" obstacle_input=\"false\" estop=\"false\"\n"
+		"           joystick=\"false\"/>\n"
+		"  <backends>\n"
+		"    <canopen bus=\"0\" interface=\"can0\"/>\n"
+		"%s"
+		"  </backends>\n"
+		"</vehicle>\n",
+		body);
+	fclose(f);
+	err[0] = '\0';
+	int rc = backend_cfg_load(path, b, err, len);
+	if (rc != want)
+		fail_msg("%s: %d (%s), expected %d", body, rc, err, want);
+	/* the message without the temporary file's name */
+	size_t n = strlen(path);
+	if (!strncmp(err, path, n))
+		memmove(err, err + n, strlen(err + n) + 1);
+	unlink(path);
+}
+
+static void test_backends_drive(void **state)
+{
+	(void)state;
+	backend_cfg_t b;
+	char err[256];
+	/* a second <drive> for an axis is refused, not silently taken */
+	load_backends("    <drive axis=\"0\" type=\"cia402\" bus=\"0\" node=\"1\"/>\n"
+		      "    <drive axis=\"1\" type=\"cia402\" bus=\"0\" node=\"2\"/>\n"
+		      "    <drive axis=\"0\" type=\"loopback\"/>\n",
+		      &b, err, sizeof(err), -1);
+	assert_string_equal(err, ":8: drive.axis: duplicate '0'");
+	load_backends("    <drive axis=\"1\" type=\"cia402\" bus=\"0\" node=\"2\"/>\n"
+		      "    <drive axis=\"1\" type=\"cia402\" bus=\"0\" node=\"3\"/>\n",
+		      &b, err, sizeof(err), -1);
+	assert_string_equal(err, ":7: drive.axis: duplicate '1'");
+	/* polarity */
+	load_backends("    <modbus bus=\"1\" device=\"/dev/ttyUSB0\" reg_target_speed=\"0\"\n"
+		      "            reg_position=\"2\" reg_status=\"4\" reg_alarm=\"5\"\n"
+		      "            reg_servo_on=\"6\" reg_fault_reset=\"7\"/>\n"
+		      "    <drive axis=\"0\" type=\"cia402\" bus=\"0\" node=\"1\" "
+		      "polarity=\"reverse\"/>\n"
+		      "    <drive axis=\"1\" type=\"cia402\" bus=\"0\" node=\"2\" "
+		      "polarity=\"normal\"/>\n"
+		      "    <drive axis=\"2\" type=\"modbus\" bus=\"1\" unit=\"4\" "
+		      "polarity=\"reverse\"/>\n"
+		      "    <drive axis=\"3\" type=\"modbus\" bus=\"1\" unit=\"5\"/>\n",
+		      &b, err, sizeof(err), 0);
+	assert_true(b.drive_reverse[0]);
+	assert_false(b.drive_reverse[1]);
+	assert_true(b.drive_reverse[2]);
+	assert_false(b.drive_reverse[3]);
+	assert_int_equal(b.drive_type[2], BK_DRIVE_MODBUS);
+	assert_int_equal(b.canopen[0].fault_reset_ms, 200);
+	load_backends("    <drive axis=\"0\" type=\"cia402\" bus=\"0\" node=\"1\" "
+		      "polarity=\"mirrored\"/>\n",
+		      &b, err, sizeof(err), -1);
+	assert_string_equal(err, ":6: drive.polarity: normal or reverse 'mirrored'");
+	load_backends("    <drive axis=\"0\" type=\"loopback\" polarity=\"reverse\"/>\n", &b, err,
+		      sizeof(err), -1);
+	assert_string_equal(err, ":6: drive.polarity: only for modbus and cia402");
+	/* the fault reset bound */
+	load_backends("    <canopen bus=\"1\" interface=\"can1\" fault_reset_ms=\"1500\"/>\n", &b,
+		      err, sizeof(err), 0);
+	assert_int_equal(b.canopen[1].fault_reset_ms, 1500);
+	load_backends("    <canopen bus=\"1\" interface=\"can1\" fault_reset_ms=\"9\"/>\n", &b, err,
+		      sizeof(err), -1);
+	assert_string_equal(err, ":6: canopen.fault_reset_ms: out of range 10..10000 '9'");
 }
 
 static void test_bus_send_errors(void **state)
@@ -1016,6 +1455,12 @@ int main(void)
 	    cmocka_unit_test(test_bus_heartbeat_loss),
 	    cmocka_unit_test(test_bus_emcy_fault_and_reset),
 	    cmocka_unit_test(test_bus_restarted_drive),
+	    cmocka_unit_test(test_bus_mode_not_confirmed),
+	    cmocka_unit_test(test_bus_not_operational),
+	    cmocka_unit_test(test_bus_comeback_keeps_count),
+	    cmocka_unit_test(test_bus_polarity),
+	    cmocka_unit_test(test_bus_fault_reset_waits_reaction),
+	    cmocka_unit_test(test_backends_drive),
 	    cmocka_unit_test(test_bus_send_errors),
 	    cmocka_unit_test(test_bus_close),
 	};

@@ -3,6 +3,9 @@
  * second pty. Moves, a drive reporting an error, fault reset, a drive that
  * stops answering mid-move, SIGTERM; the battery voltage from a register of
  * a drive's unit and of a BMS of its own, changing, failing and returning.
+ * And the backend itself in this process against the same simulator:
+ * what it reports (enabled from the status bit, phase), the speed it
+ * writes (0 until the stage is on) and the polarity option.
  * Runs in the QEMU guest on its instruction-counted clock
  * (tests/qemu/fw_process.sh): its timing checks then hold on a busy host. */
 #include <errno.h>
@@ -21,8 +24,11 @@
 #include <unistd.h>
 
 #include <cmocka.h>
+#include <modbus/modbus.h>
 
 #include "fw_rig.h"
+
+#include "../hal/linux/modbus_drive.h"
 
 static char BUS_A[600], BUS_B[600];
 static pid_t SOCAT = -1, SIM = -1, FW = -1;
@@ -445,10 +451,145 @@ static void test_pymodbus_crosscheck(void **state)
 	assert_string_equal(out, "crosscheck: PASS\n");
 }
 
+/* ---- the backend in this process, against the simulator ---------------- */
+
+/* The bus thread stops; its port stays open for raw reads (b->ctx), with
+ * a timeout a loaded host cannot miss. */
+static void bus_pause(mb_bus_t *b)
+{
+	b->stop = true;
+	pthread_join(b->th, NULL);
+	b->running = false;
+	b->stop = false;
+	modbus_set_response_timeout(b->ctx, 1, 0);
+}
+
+/* The bus thread again, with the bus's own response timeout. */
+static void bus_resume(mb_bus_t *b)
+{
+	char err[256] = "";
+	modbus_set_response_timeout(b->ctx, 0, b->cfg.timeout_ms * 1000u);
+	if (mb_bus_start(b, err, sizeof(err)) != 0)
+		fail_msg("%s", err);
+}
+
+/* Polls the backend's sample of drive i until ok(st) (bounded by ms). */
+static void wait_drive(mb_bus_t *b, unsigned i, bool (*ok)(const hal_drive_state_t *), long ms,
+		       hal_drive_state_t *st)
+{
+	long end = now_ms() + ms;
+	do {
+		mb_drive_read(b, i, st);
+		if (st->fresh && ok(st))
+			return;
+		fw_sleep_ms(5);
+	} while (now_ms() < end);
+	print_message("drive %u: enabled %d phase %u fault 0x%04X\n", i, st->enabled, st->phase,
+		      st->fault_code);
+	fail();
+}
+
+static bool is_ready(const hal_drive_state_t *st)
+{
+	return st->phase == HAL_DRIVE_READY;
+}
+
+static bool is_enabled(const hal_drive_state_t *st)
+{
+	return st->enabled;
+}
+
+static bool is_fault(const hal_drive_state_t *st)
+{
+	return st->fault_code != 0;
+}
+
+/* One raw int32 pair (high word first) of a unit, on the paused bus. */
+static int32_t raw32(mb_bus_t *b, int unit, int addr)
+{
+	uint16_t r[2] = {0, 0};
+	modbus_set_slave(b->ctx, unit);
+	assert_int_equal(modbus_read_registers(b->ctx, addr, 2, r), 2);
+	return (int32_t)(((uint32_t)r[0] << 16) | r[1]);
+}
+
+/* enabled is the drive's status bit, never the servo on command; the speed
+ * written is 0 until that bit is on; polarity reverse negates the speed
+ * written and the position read (unit 1 reverse, unit 2 normal). */
+static void test_backend_report_and_polarity(void **state)
+{
+	(void)state;
+	char err[256] = "";
+	hal_drive_state_t st;
+	bk_modbus_bus_t cfg = {.used = true,
+			       .baud = 115200,
+			       .parity = 'N',
+			       .stop_bits = 1,
+			       .timeout_ms = 50,
+			       .retries = 1,
+			       .reg = {256, 258, 260, 261, 262, 263}};
+	assert_true(strlen(BUS_B) < sizeof(cfg.device));
+	memcpy(cfg.device, BUS_B, strlen(BUS_B) + 1);
+	static mb_bus_t b;
+	if (mb_bus_open(&b, &cfg, err, sizeof(err)) != 0)
+		fail_msg("%s", err);
+	assert_int_equal(mb_bus_add(&b, 1, true), 0);
+	assert_int_equal(mb_bus_add(&b, 2, false), 1);
+	mb_drive_read(&b, 0, &st);
+	assert_false(st.fresh);
+	assert_int_equal(st.phase, HAL_DRIVE_UNKNOWN); /* nothing read yet */
+	assert_int_equal(mb_bus_start(&b, err, sizeof(err)), 0);
+
+	/* a speed without servo on: the stage stays off, nothing written */
+	mb_drive_set_velocity(&b, 0, 256 * 2000);
+	mb_drive_set_velocity(&b, 1, 256 * 2000);
+	wait_drive(&b, 0, is_ready, 1000, &st);
+	assert_false(st.enabled);
+	assert_int_equal(st.position_counts, 0);
+	bus_pause(&b);
+	assert_int_equal(raw32(&b, 1, 256), 0);
+	assert_int_equal(raw32(&b, 2, 256), 0);
+	bus_resume(&b);
+
+	/* servo on: enabled once the drive's status bit says so */
+	mb_drive_enable(&b, 0, true);
+	mb_drive_enable(&b, 1, true);
+	wait_drive(&b, 0, is_enabled, 1000, &st);
+	assert_int_equal(st.phase, HAL_DRIVE_ENABLED);
+	wait_drive(&b, 1, is_enabled, 1000, &st);
+	fw_sleep_ms(100);
+	/* unit 1 (reverse) was sent -2000 counts/s, unit 2 +2000 */
+	bus_pause(&b);
+	assert_int_equal(raw32(&b, 1, 256), -2000);
+	assert_int_equal(raw32(&b, 2, 256), 2000);
+	assert_true(raw32(&b, 1, 258) < -100);
+	assert_true(raw32(&b, 2, 258) > 100);
+	bus_resume(&b);
+
+	/* unit 1 raises its alarm: the stage goes off while servo on is still
+	 * commanded; not enabled, phase fault, the speed written is 0 */
+	assert_int_equal(kill(SIM, SIGUSR2), 0);
+	wait_drive(&b, 0, is_fault, 1000, &st);
+	assert_int_equal(st.fault_code, 0x31);
+	assert_false(st.enabled);
+	assert_int_equal(st.phase, HAL_DRIVE_FAULT);
+	/* two more samples: the position stands (stage off) */
+	wait_drive(&b, 0, is_fault, 1000, &st);
+	wait_drive(&b, 0, is_fault, 1000, &st);
+	int32_t reported = st.position_counts;
+	assert_true(reported > 100);
+	bus_pause(&b);
+	assert_int_equal(raw32(&b, 1, 256), 0);
+	assert_int_equal(raw32(&b, 1, 258), -reported);
+	assert_int_equal(raw32(&b, 2, 256), 2000);
+	mb_bus_close(&b);
+}
+
 int main(int argc, char **argv)
 {
 	const struct CMUnitTest tests[] = {
 	    cmocka_unit_test_setup_teardown(test_pymodbus_crosscheck, setup_bus, teardown),
+	    cmocka_unit_test_setup_teardown(test_backend_report_and_polarity, setup_bus, teardown),
 	    cmocka_unit_test_setup_teardown(test_move_over_modbus, setup, teardown),
 	    cmocka_unit_test_setup_teardown(test_drive_error, setup, teardown),
 	    cmocka_unit_test_setup_teardown(test_drive_silent_then_sigterm, setup, teardown),

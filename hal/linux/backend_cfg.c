@@ -79,7 +79,7 @@ _Static_assert(BK_CANOPEN_BUSES == BK_MODBUS_BUSES, "drive.bus range");
 static int drive_elem(bctx_t *c, const char **a)
 {
 	uint32_t axis = UINT32_MAX, bus = UINT32_MAX, unit = UINT32_MAX, node = UINT32_MAX;
-	int type = -1;
+	int type = -1, reverse = -1;
 	for (; a[0]; a += 2) {
 		if (!strcmp(a[0], "axis")) {
 			if (get_uint(c, "drive", "axis", a[1], 0, VS_MAX_AXES - 1, &axis))
@@ -102,6 +102,10 @@ static int drive_elem(bctx_t *c, const char **a)
 		} else if (!strcmp(a[0], "node")) {
 			if (get_uint(c, "drive", "node", a[1], 1, 127, &node))
 				return -1;
+		} else if (!strcmp(a[0], "polarity")) {
+			if (strcmp(a[1], "normal") != 0 && strcmp(a[1], "reverse") != 0)
+				return fail(c, "drive.polarity: normal or reverse '%s'", a[1]);
+			reverse = a[1][0] == 'r';
 		} else {
 			return fail(c, "drive.%s: unknown attribute", a[0]);
 		}
@@ -110,6 +114,9 @@ static int drive_elem(bctx_t *c, const char **a)
 		return fail(c, "drive.axis: required");
 	if (type < 0)
 		return fail(c, "drive.type: required");
+	/* a second element for one axis would silently replace the first */
+	if (c->drive_line[axis])
+		return fail(c, "drive.axis: duplicate '%u'", axis);
 	if (type == BK_DRIVE_MODBUS) {
 		if (bus == UINT32_MAX || unit == UINT32_MAX)
 			return fail(c, "drive.%s: required for modbus",
@@ -129,7 +136,10 @@ static int drive_elem(bctx_t *c, const char **a)
 		return fail(c, "drive.unit: only for modbus");
 	if (node != UINT32_MAX && type != BK_DRIVE_CIA402)
 		return fail(c, "drive.node: only for cia402");
+	if (reverse >= 0 && type == BK_DRIVE_LOOPBACK)
+		return fail(c, "drive.polarity: only for modbus and cia402");
 	c->b->drive_type[axis] = (uint8_t)type;
+	c->b->drive_reverse[axis] = reverse > 0;
 	c->drive_line[axis] = c->line;
 	return 0;
 }
@@ -201,7 +211,8 @@ static int canopen_elem(bctx_t *c, const char **a)
 	bk_canopen_bus_t m = {.heartbeat_ms = 100,
 			      .heartbeat_timeout_ms = 300,
 			      .sdo_timeout_ms = 100,
-			      .boot_timeout_ms = 2000};
+			      .boot_timeout_ms = 2000,
+			      .fault_reset_ms = 200};
 	const struct {
 		const char *name;
 		uint32_t *dst;
@@ -213,6 +224,7 @@ static int canopen_elem(bctx_t *c, const char **a)
 	    {"boot_timeout_ms", &m.boot_timeout_ms, 1, 60000},
 	    {"master_node", &m.master_node, 1, 127},
 	    {"profile_accel", &m.profile_accel, 1, 0x7FFFFFFFul},
+	    {"fault_reset_ms", &m.fault_reset_ms, 10, 10000},
 	};
 	uint32_t bus = UINT32_MAX;
 	for (; a[0]; a += 2) {

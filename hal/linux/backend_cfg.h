@@ -9,10 +9,10 @@
  *     <backends>
  *       <drive axis="0" type="loopback"/>      one per axis; type: loopback | modbus | cia402
  *       <drive axis="1" type="modbus" bus="0" unit="2"/>
- *       <drive axis="2" type="cia402" bus="0" node="1"/>
+ *       <drive axis="2" type="cia402" bus="0" node="1" polarity="reverse"/>
  *       <canopen bus="0" interface="can0" heartbeat_ms="100" heartbeat_timeout_ms="300"
  *                sdo_timeout_ms="100" boot_timeout_ms="2000" master_node="127"
- *                profile_accel="100000"/>
+ *                profile_accel="100000" fault_reset_ms="200"/>
  *       <modbus bus="0" device="/dev/ttyUSB0" baud="115200" parity="N" stop_bits="1"
  *               timeout_ms="20" retries="1" reg_target_speed="0" reg_position="2"
  *               reg_status="4" reg_alarm="5" reg_servo_on="6" reg_fault_reset="7"/>
@@ -49,8 +49,15 @@
  * (100), boot_timeout_ms 1..60000 (2000), master_node 1..127 (optional: the
  * vehicle computer then sends its heartbeat on 0x700+master_node and each
  * drive stops itself when it misses it for heartbeat_timeout_ms),
- * profile_accel counts/s^2 (optional, written to 0x6083 and 0x6084). node
- * 1..127, unique on its bus and not the master_node.
+ * profile_accel counts/s^2 (optional, written to 0x6083 and 0x6084),
+ * fault_reset_ms 10..10000 (200: how long the fault reset bit is held while
+ * the drive stays in fault). node 1..127, unique on its bus and not the
+ * master_node.
+ *
+ * drive polarity (modbus, cia402): normal (default) | reverse, for a motor
+ * mounted mirrored: the master negates the velocity setpoint and the
+ * position it reads (it never writes the drive's polarity object). One
+ * <drive> per axis: a second one for the same axis is an error.
  *
  * joystick: an evdev device (libevdev). x, y, rotation name the absolute
  * axes (ABS_*; y may be omitted); each axis's range maps to +-32767 (full
@@ -106,6 +113,7 @@ typedef struct {
 	uint32_t boot_timeout_ms;      /* boot-up after reset communication */
 	uint32_t master_node;	       /* 0: no master heartbeat */
 	uint32_t profile_accel;	       /* 0: not written */
+	uint32_t fault_reset_ms;       /* longest hold of the fault reset bit */
 } bk_canopen_bus_t;
 
 enum { BK_BATTERY_FIXED = 0, BK_BATTERY_IIO = 1, BK_BATTERY_MODBUS = 2 };
@@ -152,6 +160,9 @@ typedef struct {
 	uint8_t drive_bus[VS_MAX_AXES];	 /* modbus, cia402: bus index */
 	uint8_t drive_unit[VS_MAX_AXES]; /* modbus: unit id 1..247 */
 	uint8_t drive_node[VS_MAX_AXES]; /* cia402: node id 1..127 */
+	/* modbus, cia402: the motor is mounted mirrored; the master negates
+	 * setpoint and position (the drive's own polarity is left alone) */
+	bool drive_reverse[VS_MAX_AXES];
 	bk_modbus_bus_t bus[BK_MODBUS_BUSES];
 	bk_canopen_bus_t canopen[BK_CANOPEN_BUSES];
 	uint32_t settle_ms;

@@ -52,6 +52,22 @@ bool co_state_is_fault(co_state_t s)
 	return s == CO_ST_FAULT || s == CO_ST_FAULT_REACTION;
 }
 
+uint8_t co_hal_phase(co_state_t s)
+{
+	static const uint8_t ph[] = {
+	    [CO_ST_UNKNOWN] = HAL_DRIVE_UNKNOWN,
+	    [CO_ST_NOT_READY] = HAL_DRIVE_NOT_READY,
+	    [CO_ST_SWITCH_ON_DISABLED] = HAL_DRIVE_SWITCH_ON_DISABLED,
+	    [CO_ST_READY] = HAL_DRIVE_READY,
+	    [CO_ST_SWITCHED_ON] = HAL_DRIVE_SWITCHED_ON,
+	    [CO_ST_OP_ENABLED] = HAL_DRIVE_ENABLED,
+	    [CO_ST_QUICK_STOP] = HAL_DRIVE_QUICK_STOP,
+	    [CO_ST_FAULT_REACTION] = HAL_DRIVE_FAULT_REACTION,
+	    [CO_ST_FAULT] = HAL_DRIVE_FAULT,
+	};
+	return (unsigned)s < sizeof(ph) ? ph[s] : (uint8_t)HAL_DRIVE_UNKNOWN;
+}
+
 uint16_t co_controlword(co_state_t s, bool enable, bool reset)
 {
 	switch (s) {
@@ -126,12 +142,13 @@ void co_rpdo1_frame(canlink_frame_t *f, uint8_t node, uint16_t cw, int32_t vel)
 	put_le(f->data + 2, (uint32_t)vel, 4);
 }
 
-bool co_tpdo1_decode(const canlink_frame_t *f, uint16_t *sw, int32_t *pos)
+bool co_tpdo1_decode(const canlink_frame_t *f, uint16_t *sw, int32_t *pos, int8_t *mode)
 {
-	if (f->dlc < 6)
+	if (f->dlc < 7)
 		return false;
 	*sw = (uint16_t)get_le(f->data, 2);
 	*pos = (int32_t)get_le(f->data + 2, 4);
+	*mode = (int8_t)f->data[6];
 	return true;
 }
 
@@ -259,12 +276,14 @@ unsigned co_config_list(const co_cfg_t *c, uint8_t node, co_sdo_req_t out[CO_CFG
 	n = add_dl(out, n, 0x1600, 0, 1, 2);
 	n = add_dl(out, n, 0x1400, 2, 1, 1);
 	n = add_dl(out, n, 0x1400, 1, 4, CO_ID_RPDO1 + node);
-	/* TPDO1: sent on every SYNC. */
+	/* TPDO1: sent on every SYNC. The mode display rides with each
+	 * statusword: enabled means enabled in profile velocity, now. */
 	n = add_dl(out, n, 0x1800, 1, 4, 0x80000000u | (CO_ID_TPDO1 + node));
 	n = add_dl(out, n, 0x1A00, 0, 1, 0);
 	n = add_dl(out, n, 0x1A00, 1, 4, 0x60410010u); /* statusword */
 	n = add_dl(out, n, 0x1A00, 2, 4, 0x60640020u); /* position actual value */
-	n = add_dl(out, n, 0x1A00, 0, 1, 2);
+	n = add_dl(out, n, 0x1A00, 3, 4, 0x60610008u); /* modes of operation display */
+	n = add_dl(out, n, 0x1A00, 0, 1, 3);
 	n = add_dl(out, n, 0x1800, 2, 1, 1);
 	n = add_dl(out, n, 0x1800, 1, 4, CO_ID_TPDO1 + node);
 	n = add_dl(out, n, 0x1017, 0, 2, c->heartbeat_ms);
@@ -417,14 +436,17 @@ void co_bus_init(co_bus_t *b, unsigned index, const bk_canopen_bus_t *cfg)
 	b->cfg = *cfg;
 	b->sock.fd = -1;
 	b->used = true;
+	if (!b->cfg.fault_reset_ms)
+		b->cfg.fault_reset_ms = CO_FAULT_RESET_MS;
 }
 
-unsigned co_bus_add(co_bus_t *b, uint8_t axis, uint8_t node)
+unsigned co_bus_add(co_bus_t *b, uint8_t axis, uint8_t node, bool reverse)
 {
 	co_drive_t *d = &b->d[b->nd];
 	memset(d, 0, sizeof(*d));
 	d->node = node;
 	d->axis = axis;
+	d->reverse = reverse;
 	d->hb.state = CO_HB_NONE;
 	co_cfg_t c = {.heartbeat_ms = (uint16_t)b->cfg.heartbeat_ms,
 		      .master_node = (uint8_t)b->cfg.master_node,
@@ -498,8 +520,10 @@ static bool tx(co_bus_t *b, const canlink_frame_t *f)
 #define DRV_FMT	    "canopen bus %u (%s): node %u (axis %u): "
 #define DRV_ARGS(d) b->index, b->cfg.interface, (d)->node, (d)->axis
 
-/* A drive restarted or left operational: configure and start it again. */
-static void reconfigure(co_bus_t *b, co_drive_t *d, const char *why)
+/* A drive restarted or left operational: configure and start it again.
+ * Only a restart loses the count: a drive that merely left operational
+ * still has its position register, which goes on counting. */
+static void reconfigure(co_bus_t *b, co_drive_t *d, const char *why, bool restarted)
 {
 	co_log(LOG_WARNING, DRV_FMT "%s: configuring it again", DRV_ARGS(d), why);
 	d->phase = CO_PHASE_CONFIG;
@@ -510,7 +534,11 @@ static void reconfigure(co_bus_t *b, co_drive_t *d, const char *why)
 	d->have_status = false;
 	d->state = CO_ST_UNKNOWN;
 	d->emcy_code = 0;
-	d->rebase = true;
+	d->mode_logged = false;
+	if (restarted) {
+		d->rebase = true;
+		d->lost_pending = true;
+	}
 	d->tpdo_new = false;
 	d->seen_operational = false;
 	d->restarts++;
@@ -525,9 +553,9 @@ static void rx_heartbeat(co_bus_t *b, co_drive_t *d, uint8_t state, uint32_t now
 		return;
 	}
 	if (state == CO_HB_BOOTUP) {
-		reconfigure(b, d, "boot-up message (the drive restarted)");
+		reconfigure(b, d, "boot-up message (the drive restarted)", true);
 	} else if (state == CO_HB_PREOP && d->phase == CO_PHASE_RUN && d->seen_operational) {
-		reconfigure(b, d, "pre-operational after operational");
+		reconfigure(b, d, "pre-operational after operational", false);
 	} else if (state == CO_HB_OPERATIONAL && d->phase == CO_PHASE_RUN) {
 		d->seen_operational = true;
 	}
@@ -538,7 +566,8 @@ static void rx_tpdo(co_bus_t *b, co_drive_t *d, const canlink_frame_t *f)
 {
 	uint16_t sw;
 	int32_t raw;
-	if (!co_tpdo1_decode(f, &sw, &raw)) {
+	int8_t mode;
+	if (!co_tpdo1_decode(f, &sw, &raw, &mode)) {
 		b->rx_bad++;
 		return;
 	}
@@ -555,6 +584,9 @@ static void rx_tpdo(co_bus_t *b, co_drive_t *d, const canlink_frame_t *f)
 	d->pos = (int32_t)((uint32_t)raw + (uint32_t)d->pos_offset);
 	d->status = sw;
 	d->state = s;
+	d->mode = mode;
+	if (mode == CO_MODE_PROFILE_VELOCITY)
+		d->mode_logged = false; /* a later change is logged again */
 	d->have_status = true;
 	d->tpdo_new = true;
 }
@@ -922,6 +954,50 @@ static void supervise(co_bus_t *b, co_drive_t *d)
 	}
 }
 
+/* The drive is being configured again, or its heartbeat says an NMT state
+ * other than operational (none heard yet: the statusword decides). */
+static bool not_operational(const co_drive_t *d)
+{
+	return d->phase != CO_PHASE_RUN ||
+	       (d->hb.state != CO_HB_OPERATIONAL && d->hb.state != CO_HB_NONE);
+}
+
+/* Enabled as the drive itself reports it: Operation enabled, in profile
+ * velocity by its mode display. */
+static bool reports_enabled(const co_drive_t *d)
+{
+	return d->have_status && d->state == CO_ST_OP_ENABLED &&
+	       d->mode == CO_MODE_PROFILE_VELOCITY && !not_operational(d);
+}
+
+/* Controlword bit 7 of a fault reset. It rises once the drive is in fault
+ * (it is low in every other controlword) and stays up while the drive
+ * stays there: a drive still busy with its fault reaction at the edge
+ * sees it held. The request ends when the drive leaves fault, or at its
+ * bound; the bit is then low for at least one SYNC before another edge. */
+static bool fault_reset_bit(co_bus_t *b, co_drive_t *d, co_state_t s)
+{
+	if (!d->reset_req)
+		return false;
+	if (!co_state_is_fault(s) || (int32_t)(b->now_us - d->reset_until_us) >= 0) {
+		d->reset_req = false;
+		return false;
+	}
+	return s == CO_ST_FAULT;
+}
+
+/* The drive would be enabled in a mode other than profile velocity. */
+static void mode_refused(co_bus_t *b, co_drive_t *d)
+{
+	if (d->mode_logged)
+		return;
+	d->mode_logged = true;
+	co_log(LOG_WARNING,
+	       DRV_FMT "modes of operation display 0x6061 reads %d, not %u (profile velocity): "
+		       "held switched on, not enabled",
+	       DRV_ARGS(d), d->mode, CO_MODE_PROFILE_VELOCITY);
+}
+
 void co_bus_pre_tick(co_bus_t *b, uint32_t now_us)
 {
 	if (!b->started)
@@ -958,15 +1034,17 @@ void co_bus_pre_tick(co_bus_t *b, uint32_t now_us)
 		if (d->phase != CO_PHASE_RUN)
 			continue;
 		co_state_t s = d->have_status ? d->state : CO_ST_UNKNOWN;
-		bool reset = d->reset_req && s == CO_ST_FAULT;
-		if (d->reset_req && s != CO_ST_FAULT_REACTION) {
-			/* sent now, or not in fault: nothing to reset */
-			d->reset_req = false;
-			d->reset_sent = reset;
-			d->reset_until_us = now_us + CO_RESET_GRACE_US;
+		uint16_t cw = co_controlword(s, d->want_enable, fault_reset_bit(b, d, s));
+		if (cw == CO_CW_ENABLE_OP && d->mode != CO_MODE_PROFILE_VELOCITY) {
+			/* switched on stays there; operation enabled is disabled */
+			cw = CO_CW_SWITCH_ON;
+			mode_refused(b, d);
 		}
-		co_rpdo1_frame(&f, d->node, co_controlword(s, d->want_enable, reset),
-			       d->want_enable ? co_velocity_of_q8(d->target_q8) : 0);
+		/* A setpoint only to a drive that reports enabled: one that
+		 * reaches Operation enabled starts from 0, not with a step. */
+		int32_t v =
+		    d->want_enable && reports_enabled(d) ? co_velocity_of_q8(d->target_q8) : 0;
+		co_rpdo1_frame(&f, d->node, cw, d->reverse ? -v : v);
 		tx(b, &f);
 	}
 	co_sync_frame(&f);
@@ -1046,21 +1124,29 @@ void co_drive_enable(co_bus_t *b, unsigned i, bool on)
 
 void co_drive_reset_fault(co_bus_t *b, unsigned i)
 {
+	/* b->now_us: the last tick's time (a command runs between ticks) */
 	b->d[i].reset_req = true;
+	b->d[i].reset_until_us = b->now_us + b->cfg.fault_reset_ms * 1000u;
 }
 
 void co_drive_read(co_bus_t *b, unsigned i, hal_drive_state_t *st)
 {
 	co_drive_t *d = &b->d[i];
 	memset(st, 0, sizeof(*st));
-	st->position_counts = d->pos;
-	if (d->have_status) {
-		st->enabled = d->state == CO_ST_OP_ENABLED;
-		bool masked =
-		    d->reset_req || (d->reset_sent && (int32_t)(b->now_us - d->reset_until_us) < 0);
-		if (co_state_is_fault(d->state) && !masked)
-			st->fault_code = d->emcy_code ? d->emcy_code : (uint16_t)CO_GENERIC_FAULT;
-	}
+	st->position_counts = d->reverse ? (int32_t)(0u - (uint32_t)d->pos) : d->pos;
+	if (not_operational(d))
+		st->phase = HAL_DRIVE_NOT_OPERATIONAL;
+	else if (d->have_status)
+		st->phase = co_hal_phase(d->state);
+	st->enabled = reports_enabled(d);
+	/* a fault being reset reads 0 until the drive leaves it or the bound */
+	if (d->have_status && co_state_is_fault(d->state) && !d->reset_req)
+		st->fault_code = d->emcy_code ? d->emcy_code : (uint16_t)CO_GENERIC_FAULT;
 	st->fresh = d->tpdo_new && d->alive;
 	d->tpdo_new = false;
+	/* with the first sample after the restart, which the firmware takes */
+	if (st->fresh && d->lost_pending) {
+		st->position_lost = true;
+		d->lost_pending = false;
+	}
 }

@@ -7,7 +7,8 @@
  * by expedited SDO (0x600+node requests, 0x580+node replies, one at a time,
  * sdo_timeout_ms each; co_config_list() is the exact sequence: device type
  * check, controlword shutdown, velocity 0, modes of operation 3, RPDO1 and
- * TPDO1 disabled / mapped / enabled, heartbeat producer time, optionally
+ * TPDO1 disabled / mapped / enabled (TPDO1 carries the modes of operation
+ * display 0x6061 beside statusword and position), heartbeat producer time, optionally
  * the consumer of the master's heartbeat and the profile acceleration),
  * then NMT start (0x000: 01 node), the drives' heartbeat saying operational
  * (within heartbeat_timeout_ms) and one SYNC answered by every TPDO1
@@ -25,7 +26,11 @@
  *      0x200+node per started drive (controlword, target velocity), one
  *      SYNC 0x080. RPDO1 carries the commands of the previous tick; the
  *      drives apply it at this SYNC and answer with TPDO1, read on the next
- *      tick.
+ *      tick. The target velocity is 0 unless the drive reports enabled (a
+ *      drive that just reached Operation enabled starts from 0, not from a
+ *      setpoint streamed while it was off). Enable operation (0x0F) is sent
+ *      only while 0x6061 says profile velocity; otherwise the drive is held
+ *      switched on (0x07) and the reason logged once.
  * A send the kernel cannot queue (ENOBUFS, EAGAIN) is counted and dropped;
  * the next tick sends fresh values. ENETDOWN (the interface is down) is
  * counted, logged once, and logged again when sends succeed again. Log
@@ -38,15 +43,28 @@
  * drive too. The firmware's drive_timeout_ms then raises fault 202.
  * A drive that sends a boot-up message after the start (it restarted), or
  * goes from operational to pre-operational, is configured again in the
- * tick and started; its position continues from the last reported value.
+ * tick and started. One that came back without a boot-up message (e.g. its
+ * own heartbeat consumer timed out) keeps counting: its 0x6064 continues,
+ * and so does the count with the offset it had. One that restarted counts
+ * on from the last reported value and reports position_lost on its first
+ * fresh read: what the wheel travelled meanwhile is unknown.
+ *
+ * Reported state (co_drive_read): phase from the statusword (co_hal_phase),
+ * HAL_DRIVE_NOT_OPERATIONAL while the drive is being configured again or
+ * its heartbeat says stopped, pre-operational or boot-up; enabled only in
+ * Operation enabled with 0x6061 = 3 and not that. Polarity reverse: the
+ * velocity sent and the position read are negated here.
  *
  * Fault: the statusword says fault (or fault reaction active); the code is
  * the error code of the last EMCY with a non-zero code, CO_GENERIC_FAULT
  * (0x1000, "generic error") when none came. The code is forgotten on an
  * EMCY 0x0000 (error reset) or when the drive leaves the fault state.
- * drive_reset_fault: one controlword 0x0080 (rising edge of bit 7) while
- * the drive is in fault; the fault code reads 0 from the request until the
- * drive has had CO_RESET_GRACE_US to leave the fault state.
+ * drive_reset_fault: controlword bit 7 rises (0x0080) once the drive is in
+ * fault (a drive in fault reaction is waited for) and is held while it
+ * stays there, at most fault_reset_ms from the request; then it is low
+ * again, so that the next request is a new rising edge. The fault code
+ * reads 0 from the request until the drive leaves the fault state or the
+ * bound passes.
  *
  * Units: the drive's velocity unit is counts/s (0x60FF, int32) and its
  * position unit counts (0x6064, int32): configure the drive's factor group
@@ -106,6 +124,8 @@
 /* Device type 0x1000, bits 0..15: the device profile. */
 #define CO_PROFILE_402		 0x0192u
 #define CO_MODE_PROFILE_VELOCITY 3u
+/* The default bound of the fault reset hold (<canopen fault_reset_ms>). */
+#define CO_FAULT_RESET_MS 200u
 
 /* Drive state from the statusword (CiA 402). */
 typedef enum {
@@ -123,6 +143,8 @@ typedef enum {
 co_state_t co_state_of(uint16_t statusword);
 const char *co_state_name(co_state_t s);
 bool co_state_is_fault(co_state_t s); /* fault or fault reaction active */
+/* The HAL's name of the same state (hal_drive_phase_t). */
+uint8_t co_hal_phase(co_state_t s);
 
 /* The controlword that moves a drive in state s one step toward operation
  * enabled (enable) or ready to switch on, power stage off (!enable):
@@ -140,8 +162,10 @@ void co_nmt_frame(canlink_frame_t *f, uint8_t cs, uint8_t node);
 void co_sync_frame(canlink_frame_t *f);
 void co_heartbeat_frame(canlink_frame_t *f, uint8_t node, uint8_t state);
 void co_rpdo1_frame(canlink_frame_t *f, uint8_t node, uint16_t controlword, int32_t velocity);
-/* TPDO1 payload: statusword, position actual (6 bytes). false: too short. */
-bool co_tpdo1_decode(const canlink_frame_t *f, uint16_t *statusword, int32_t *position);
+/* TPDO1 payload: statusword, position actual, modes of operation display
+ * (7 bytes). false: too short. */
+bool co_tpdo1_decode(const canlink_frame_t *f, uint16_t *statusword, int32_t *position,
+		     int8_t *mode);
 
 typedef struct {
 	uint16_t code;	/* emergency error code; 0: error reset / no error */
@@ -198,8 +222,6 @@ bool co_hb_alive(const co_hb_t *h, uint32_t now_us, uint32_t timeout_us);
 
 /* At most this many received frames handled per tick. */
 #define CO_RX_PER_TICK 64
-/* A drive still in fault this long after the fault reset reports it again. */
-#define CO_RESET_GRACE_US 200000u
 /* A configuration that failed in the tick is tried again after this. */
 #define CO_RETRY_US 1000000u
 
@@ -221,16 +243,19 @@ typedef struct {
 	co_phase_t phase;
 	/* commands of the firmware */
 	bool want_enable;
+	bool reverse; /* polarity reverse: setpoint and position negated */
 	int32_t target_q8;
-	bool reset_req;
-	bool reset_sent;
+	bool reset_req; /* pending or held until reset_until_us */
 	uint32_t reset_until_us;
 	/* feedback */
 	bool have_status;
 	uint16_t status;
 	co_state_t state;
+	int8_t mode;	  /* modes of operation display 0x6061 */
+	bool mode_logged; /* "not profile velocity" logged for this occurrence */
 	int32_t raw_pos, pos, pos_offset;
-	bool rebase; /* restarted: the next position continues from pos */
+	bool rebase;	   /* restarted: the next position continues from pos */
+	bool lost_pending; /* restarted: position_lost on the next fresh read */
 	bool tpdo_new;
 	uint16_t emcy_code;
 	co_hb_t hb;
@@ -264,8 +289,9 @@ typedef struct {
 } co_bus_t;
 
 void co_bus_init(co_bus_t *b, unsigned index, const bk_canopen_bus_t *cfg);
-/* Before co_bus_start; returns the drive's index on the bus. */
-unsigned co_bus_add(co_bus_t *b, uint8_t axis, uint8_t node);
+/* Before co_bus_start; returns the drive's index on the bus. reverse:
+ * polarity reverse (setpoint and position negated by the master). */
+unsigned co_bus_add(co_bus_t *b, uint8_t axis, uint8_t node, bool reverse);
 /* Opens the interface (receive filters for the added drives) and uses it
  * for b->io. -1 with one line in err. */
 int co_bus_open(co_bus_t *b, char *err, size_t errlen);

@@ -56,7 +56,8 @@ int lhal_open(lhal_t *h, const backend_cfg_t *bk, const hal_io_map_t *io, uint8_
 			goto fail;
 		for (uint8_t i = 0; i < naxes; i++)
 			if (bk->drive_type[i] == BK_DRIVE_MODBUS && bk->drive_bus[i] == n)
-				h->mb_index[i] = (uint8_t)mb_bus_add(&h->bus[n], bk->drive_unit[i]);
+				h->mb_index[i] = (uint8_t)mb_bus_add(&h->bus[n], bk->drive_unit[i],
+								     bk->drive_reverse[i]);
 		if (battery)
 			mb_bus_add_battery(&h->bus[n], &bk->battery_mb, bk->battery_scale);
 		/* Started before the caller turns to SCHED_FIFO: the bus threads
@@ -74,8 +75,8 @@ int lhal_open(lhal_t *h, const backend_cfg_t *bk, const hal_io_map_t *io, uint8_
 		co_bus_init(&h->can[n], n, &bk->canopen[n]);
 		for (uint8_t i = 0; i < naxes; i++)
 			if (bk->drive_type[i] == BK_DRIVE_CIA402 && bk->drive_bus[i] == n)
-				h->co_index[i] =
-				    (uint8_t)co_bus_add(&h->can[n], i, bk->drive_node[i]);
+				h->co_index[i] = (uint8_t)co_bus_add(
+				    &h->can[n], i, bk->drive_node[i], bk->drive_reverse[i]);
 		/* SDO configuration blocks here, before the control loop. */
 		if (co_bus_open(&h->can[n], err, errlen) < 0 ||
 		    co_bus_start(&h->can[n], err, errlen) < 0)
@@ -196,8 +197,10 @@ static void op_drive_read(void *ctx, uint8_t axis, hal_drive_state_t *st)
 		co_drive_read(cb, h->co_index[axis], st);
 		return;
 	}
+	/* The software drive is its own report: on as commanded. */
 	st->position_counts = h->loop[axis].pos;
 	st->enabled = h->loop[axis].enabled;
+	st->phase = st->enabled ? HAL_DRIVE_ENABLED : HAL_DRIVE_READY;
 	st->fresh = true;
 }
 

@@ -45,11 +45,12 @@ int mb_bus_open(mb_bus_t *b, const bk_modbus_bus_t *cfg, char *err, size_t errle
 	return 0;
 }
 
-unsigned mb_bus_add(mb_bus_t *b, uint8_t unit)
+unsigned mb_bus_add(mb_bus_t *b, uint8_t unit, bool reverse)
 {
 	mb_drive_t *d = &b->d[b->nd];
 	memset(d, 0, sizeof(*d));
 	d->unit = unit;
+	d->reverse = reverse;
 	return b->nd++;
 }
 
@@ -97,7 +98,8 @@ static void cycle_drive(mb_bus_t *b, mb_drive_t *d)
 	bool en;
 	uint32_t reset;
 	pthread_mutex_lock(&b->mu);
-	cps = d->cmd_cps;
+	/* a speed only to a stage that is on: it starts from 0, not a step */
+	cps = d->cmd_enable && (d->status & 1u) ? d->cmd_cps : 0;
 	en = d->cmd_enable;
 	reset = d->reset_req;
 	pthread_mutex_unlock(&b->mu);
@@ -139,6 +141,7 @@ static void cycle_drive(mb_bus_t *b, mb_drive_t *d)
 		d->status = st;
 		d->alarm = al;
 		d->fresh = true;
+		d->sampled = true;
 		d->silent = false;
 	} else {
 		d->failures++;
@@ -282,6 +285,8 @@ void mb_drive_set_velocity(mb_bus_t *b, unsigned i, int32_t cps_q8)
 {
 	/* counts/s, rounded to nearest */
 	int32_t cps = (int32_t)(((int64_t)cps_q8 + (cps_q8 >= 0 ? 128 : -128)) / 256);
+	if (b->d[i].reverse)
+		cps = -cps; /* within +-2^23: no overflow */
 	pthread_mutex_lock(&b->mu);
 	b->d[i].cmd_cps = cps;
 	pthread_mutex_unlock(&b->mu);
@@ -307,9 +312,14 @@ void mb_drive_read(mb_bus_t *b, unsigned i, hal_drive_state_t *st)
 {
 	mb_drive_t *d = &b->d[i];
 	pthread_mutex_lock(&b->mu);
-	st->position_counts = d->pos;
+	st->position_counts = d->reverse ? (int32_t)(0u - (uint32_t)d->pos) : d->pos;
 	st->fault_code = d->alarm;
 	st->enabled = (d->status & 1u) != 0;
+	st->phase = !d->sampled	  ? HAL_DRIVE_UNKNOWN
+		    : d->alarm	  ? HAL_DRIVE_FAULT
+		    : st->enabled ? HAL_DRIVE_ENABLED
+				  : HAL_DRIVE_READY;
+	st->position_lost = false;
 	st->fresh = d->fresh;
 	d->fresh = false;
 	pthread_mutex_unlock(&b->mu);

@@ -12,7 +12,17 @@
  *
  * Registers (holding, backend_cfg.h): target speed counts/s and position
  * counts as int32 in two registers, high word first; status bit 0 = power
- * stage enabled; alarm = the drive's code (0 none).
+ * stage enabled; alarm = the drive's code (0 none). The target speed
+ * written is 0 unless servo on is commanded and the last status read says
+ * the stage is on (no step when it comes on).
+ *
+ * Reported state: enabled is status bit 0 as last read, never the servo on
+ * command; phase HAL_DRIVE_FAULT while the alarm register is non-zero,
+ * else HAL_DRIVE_ENABLED with bit 0, else HAL_DRIVE_READY (the registers
+ * tell no more), HAL_DRIVE_UNKNOWN before the first read. These registers
+ * give no sign of a drive that restarted: position_lost is never set (a
+ * restarted drive's count jumps to its new position register). Polarity
+ * reverse: the speed written and the position read are negated here.
  *
  * Battery (<battery source="modbus">): after each round of the drives, when
  * its period is due, the bus thread reads the battery register of its unit
@@ -38,6 +48,7 @@
 
 typedef struct {
 	uint8_t unit;
+	bool reverse; /* polarity reverse: speed and position negated */
 	/* tick -> bus */
 	int32_t cmd_cps;
 	bool cmd_enable;
@@ -46,6 +57,7 @@ typedef struct {
 	int32_t pos;
 	uint16_t status, alarm;
 	bool fresh;
+	bool sampled;	   /* one read succeeded since start */
 	uint32_t failures; /* cycles whose reads failed */
 	/* bus thread only */
 	bool silent; /* last cycle failed: probe only */
@@ -86,8 +98,9 @@ typedef struct {
 
 /* Opens the port (8 data bits). -1 with a message. */
 int mb_bus_open(mb_bus_t *b, const bk_modbus_bus_t *cfg, char *err, size_t errlen);
-/* Before mb_bus_start; returns the drive's index on the bus. */
-unsigned mb_bus_add(mb_bus_t *b, uint8_t unit);
+/* Before mb_bus_start; returns the drive's index on the bus. reverse:
+ * polarity reverse (speed and position negated by the master). */
+unsigned mb_bus_add(mb_bus_t *b, uint8_t unit, bool reverse);
 /* Before mb_bus_start: this bus also reads the battery. */
 void mb_bus_add_battery(mb_bus_t *b, const bk_battery_modbus_t *cfg, double scale_mv);
 int mb_bus_start(mb_bus_t *b, char *err, size_t errlen);
