@@ -9,7 +9,8 @@
 # heartbeat and TPDOs stop (fault 202); vcan0 going down mid-move (fault
 # 202, the log says so; the drives stop on the missed master heartbeat) and
 # coming back (clearAlarm, moving again); a drive that restarts (configured
-# again in the tick); SIGTERM (drives switched off, pre-operational); and
+# again in the tick, its position kept, the position lost: motion refused
+# until setPosition); SIGTERM (drives switched off, pre-operational); and
 # start-up failures (SDO abort, missing boot-up, interface down).
 #
 # A tick overrun (fault 209) fails the test (run-guest.sh -i keeps the
@@ -284,19 +285,24 @@ nap 0.2
 moves 50
 
 # ---- a drive restarts: configured again in the tick ------------------------------
-# servo off, so the wheels stand still; its position counts from 0 again
+# servo off, so the wheels stand still; its position counts from 0 again,
+# the reported count goes on from the last one, and the unit refuses
+# motion until the host says where it is
 cmd 'setServo false' 'ok true'
 nap 0.3
 ask getPosition
 p0=$R
 sim 'reboot 1' ok
 nap 1.0
-cmd 'getActiveAlarm 1' 'ok true 1 1 202 fault "drive 0 not answering"'
+cmd 'getActiveAlarm 2' 'ok true 2 2 155 warning "drive 0 position lost: setPosition required" 202 fault "drive 0 not answering"'
 cmd getPosition "$p0"
 sim 'state 1' '1 ready pos 0 vel 0'
 cmd 'clearAlarm' 'ok true'
 cmd 'setServo true' 'ok true'
 nap 0.2
+cmd 'moveForward 50' 'ok false'
+cmd "setPosition ${p0#ok true }" 'ok true'
+cmd 'clearAlarm' 'ok true' # the refusal's warning 132
 moves 50
 
 # ---- SIGTERM: drives switched off, pre-operational ----------------------------------
@@ -342,16 +348,18 @@ index_frames
 # start-up: reset communication, boot-up, then SDO (device type, shutdown,
 # mode 3, PDO mappings with the PDO invalid meanwhile, heartbeat, consumer
 # of the master's heartbeat), then NMT start; then SYNC, heartbeats, RPDOs
-# and TPDOs
+# and TPDOs (statusword, position, mode display 3)
 for f in 000#8201 000#8202 601#4000100000000000 581#4300100092010200 \
 	601#2B40600006000000 581#6040600000000000 \
 	601#2F60600003000000 581#6060600000000000 602#2F60600003000000 582#6060600000000000 \
 	601#2300140101020080 601#2F00160000000000 601#2300160110004060 601#230016022000FF60 \
 	601#2F00160002000000 601#2F00140201000000 601#2300140101020000 \
-	601#2300180181010080 601#23001A0110004160 601#23001A0220006460 601#2F001A0002000000 \
+	601#2300180181010080 601#23001A0110004160 601#23001A0220006460 601#23001A0308006160 \
+	601#2F001A0003000000 \
 	601#2F00180201000000 601#2300180181010000 601#2B17100064000000 581#6017100000000000 \
 	601#231610012C017F00 000#0101 000#0102 080# 77F#05 701#05 702#05 \
-	201#060000000000 202#060000000000 181#310200000000 182#310200000000 181#370200000000; do
+	201#060000000000 202#060000000000 181#31020000000003 182#31020000000003 \
+	181#37020000000003; do
 	seen "$f"
 done
 count_is "boot-up messages of node 1 (start, reset, restart)" 701#00 3
@@ -372,12 +380,17 @@ grep -E ' vcan0 201#0F00[0-9A-F]{8}$' /tmp/can.log | grep -qv '201#0F0000000000$
 	fail "no RPDO with a velocity"
 # EMCY, the fault in the statusword, the fault reset, the drive's EMCY 0000
 seen 081#102301A1B2C3D4E5
-grep -qE ' vcan0 181#1802[0-9A-F]{8}$' /tmp/can.log || fail "no TPDO with the fault statusword"
+grep -qE ' vcan0 181#1802[0-9A-F]{8}03$' /tmp/can.log || fail "no TPDO with the fault statusword"
 before 081#102301A1B2C3D4E5 201#800000000000
 before 201#800000000000 081#0000000000000000
-# fault resets: node 1 after the EMCY and after vcan0 came back, node 2 then
-count_is "fault resets of node 1" 201#800000000000 2
-count_is "fault resets of node 2" 202#800000000000 1
+# fault resets (bit 7 held until the drive leaves fault: counted as rising
+# edges): node 1 after the EMCY and after vcan0 came back, node 2 then
+edges() {
+	awk -v id="$1" '{ split($3, p, "#"); if (p[1] != id) next
+		hi = substr(p[2], 1, 2) == "80"; if (hi && !last) n++; last = hi } END { print n + 0 }' /tmp/can.log
+}
+expect "fault resets of node 1" "$(edges 201)" 2
+expect "fault resets of node 2" "$(edges 202)" 1
 # the restart: configured again and started again
 count_is "mode writes to node 1" 601#2F60600003000000 2
 count_is "NMT start of node 1" 000#0101 2
