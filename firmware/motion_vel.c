@@ -62,9 +62,13 @@ void motion_joystick_enable(motion_t *m, bool on)
 		}
 		m->vtarget = (fx_twist_t){0};
 	} else if (m->mode == MODE_JOYSTICK) {
-		/* Decelerate at the acceleration limit, then idle. */
+		/* Decelerate at the acceleration limit, then idle; at rest idle
+		 * now (a command sent next is not refused for a stop). */
 		m->vtarget = (fx_twist_t){0};
-		m->stopping = true;
+		if (motion_is_moving(m))
+			m->stopping = true;
+		else
+			m->mode = MODE_IDLE;
 	}
 }
 

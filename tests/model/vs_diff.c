@@ -45,6 +45,9 @@ static struct {
 	bool caution;
 	fx_twist_t prev;
 	double prev_wx, prev_wy; /* world frame, mm/s */
+	fx_twist_t prev_acc;	 /* the last tick's change of the command */
+	bool acc_valid;
+	uint8_t mode_pre;
 	bool prev_servo;
 	double counts_per_mm;
 	unsigned ticks;
@@ -150,20 +153,21 @@ static int invariants(void)
 	double w = fxd(t.w_pt) * hz;
 	bool rest = t.vx_pt == 0 && t.vy_pt == 0 && t.w_pt == 0;
 
-	if (!vm_may_move(&M) && !rest)
+	/* With the servo off nothing is driven (a fault's own tick still
+	 * carries the command; the drives get zero). */
+	if (!vm_may_move(&M) && !rest && v->servo)
 		return fail("the unit moves (%.3f mm/s, %.3f mm/s, %.3f deg/s) with no motion "
 			    "command in force",
 			    vx, vy, w);
 	/* Speed: a vector bound, in every mode. Slack: a raw unit a tick. */
-	double vt = fmax(H.vt_set, H.grace_ms ? H.vt_grace : 0);
+	double vt_free = fmax(H.vt_set, H.grace_ms ? H.vt_grace : 0);
+	double vt = vt_free;
 	if (H.caution && vt > S.cfg.caution_vel_t_mm_s)
 		vt = S.cfg.caution_vel_t_mm_s;
 	double vr = fmax(H.vr_set, H.grace_ms ? H.vr_grace : 0);
 	double slack = 1e-6 * hz;
 	/* The caution cap, like a new set velocity, is reached by braking. */
-	double vt_cap = H.caution ? fmax(vt, fmin(hyp(fxd(H.prev.vx_pt), fxd(H.prev.vy_pt)) * hz,
-						  fmax(H.vt_set, H.vt_grace)))
-				  : vt;
+	double vt_cap = H.caution && H.grace_ms ? vt_free : vt;
 	if (hyp(vx, vy) > vt_cap + slack)
 		return fail("translation %.3f mm/s over the bound %.3f mm/s", hyp(vx, vy), vt_cap);
 	if (fabs(w) > vr + slack)
@@ -183,6 +187,25 @@ static int invariants(void)
 	}
 	H.prev_wx = wx;
 	H.prev_wy = wy;
+	/* Jerk: in the velocity modes with jerks set, the change of the
+	 * translation's acceleration (a vector, in the body frame the slew
+	 * works in) within the larger of the set jerk and the limit. */
+	const motion_t *mo = &v->motion;
+	uint8_t mode = motion_mode(mo);
+	bool vel = mode == MODE_JOG || mode == MODE_JOYSTICK || mode == MODE_CONTINUOUS;
+	fx_twist_t acc = {t.vx_pt - H.prev.vx_pt, t.vy_pt - H.prev.vy_pt, t.w_pt - H.prev.w_pt};
+	if (vel && H.mode_pre == mode && mo->j_t_pt3 > 0 && mo->j_r_pt3 > 0 && v->servo &&
+	    H.prev_servo && H.acc_valid && !alarm_any_fault(&v->alarms)) {
+		double j =
+		    hyp(fxd(acc.vx_pt - H.prev_acc.vx_pt), fxd(acc.vy_pt - H.prev_acc.vy_pt));
+		double lim = fxd(mo->j_t_pt3 > mo->jmax_t_pt3 ? mo->j_t_pt3 : mo->jmax_t_pt3);
+		if (j > lim + 16.0 / 4294967296.0)
+			return fail("translation jerk %.1f mm/s^3 over the bound %.1f mm/s^3",
+				    j * hz * hz * hz, lim * hz * hz * hz);
+	}
+	H.acc_valid = vel;
+	H.mode_pre = mode;
+	H.prev_acc = acc;
 	/* The position hold at rest: each wheel within the speed bound. */
 	if (rest && v->servo) {
 		for (unsigned i = 0; i < v->naxes; i++) {
@@ -280,17 +303,26 @@ static int do_op(rd_t *r)
 	char line[CONSOLE_LINE_MAX];
 	c.op = pick_op(u8(r));
 	int k = snprintf(line, sizeof line, "%s", c.op);
+	/* Most jogs within the limits, y only where the base has it. */
+	bool sane_jog = strcmp(c.op, "moveJog") == 0 && (u8(r) & 3) != 0;
 	const cmd_def_t *d = cmd_by_name(c.op);
 	unsigned nd = 0;
 	for (unsigned i = 0; i < d->n_in; i++) {
 		switch (d->in_types[i]) {
 		case CMD_T_BOOL:
-			c.b = (u8(r) & 3) != 0;
+			/* Power and servo mostly on. */
+			c.b = (u8(r) & (strncmp(c.op, "setPower", 8) && strncmp(c.op, "setServo", 8)
+					    ? 3
+					    : 7)) != 0;
 			k += snprintf(line + k, sizeof line - (size_t)k, " %s",
 				      c.b ? "true" : "false");
 			break;
 		case CMD_T_DOUBLE: {
 			double x = arg(r, strstr(c.op, "Jog") || strstr(c.op, "set") ? 10.0 : 25.0);
+			if (sane_jog)
+				x = nd == 1 && !vs_config_omni(&S.cfg) ? 0.0
+				    : nd == 2			       ? fmod(x, 90.0)
+								       : fmod(x, 800.0);
 			if (nd < 3)
 				c.a[nd++] = x;
 			k += snprintf(line + k, sizeof line - (size_t)k, " %.17g", x);
@@ -356,6 +388,8 @@ static int do_op(rd_t *r)
 	/* A new pose turns the world frame the velocity is compared in. */
 	if (ok && strcmp(c.op, "setPosition") == 0)
 		H.prev_servo = false;
+	/* A new jerk or acceleration takes effect from the next tick. */
+	H.acc_valid = false;
 	if (ok && strcmp(c.op, "setVelocity") == 0) {
 		H.vt_grace = fmax(H.vt_set, H.grace_ms ? H.vt_grace : 0);
 		H.vr_grace = fmax(H.vr_set, H.grace_ms ? H.vr_grace : 0);
@@ -370,6 +404,10 @@ static int do_input(rd_t *r)
 {
 	plant_t *pl = &S.plant;
 	uint8_t k = u8(r) % 16, a = u8(r);
+	/* The inputs that end all motion (e-stop, relay, drive faults, a held
+	 * or rebooted drive) one time in four: the rest drive the stick. */
+	if ((k == 4 || k == 6 || k == 8 || k == 14 || k == 15) && (a & 0xC0))
+		k = (uint8_t)(9 + (a & 1));
 	switch (k) {
 	case 0:
 	case 1:
@@ -454,6 +492,12 @@ static int do_input(rd_t *r)
 	case 12:
 		H.caution = !H.caution;
 		pl->caution = H.caution;
+		/* The cap is reached by braking, as a lower set velocity is. */
+		if (H.caution) {
+			H.vt_grace = fmax(H.vt_set, H.grace_ms ? H.vt_grace : 0);
+			H.vr_grace = fmax(H.vr_set, H.grace_ms ? H.vr_grace : 0);
+			H.grace_ms = M.c.brake_ms;
+		}
 		snprintf(H.act, sizeof H.act, "caution %s", H.caution ? "on" : "off");
 		break;
 	default: {
@@ -547,6 +591,9 @@ static void setup(uint8_t mode)
 	H.caution = false;
 	H.prev = (fx_twist_t){0, 0, 0};
 	H.prev_wx = H.prev_wy = 0;
+	H.prev_acc = (fx_twist_t){0, 0, 0};
+	H.acc_valid = false;
+	H.mode_pre = 0;
 	H.prev_servo = false;
 	H.ticks = 0;
 	double d = cfg.wheel_diameter_mm;
@@ -580,7 +627,11 @@ int diff_run(const uint8_t *data, size_t n, char *why, size_t cap)
 			int16_t st;
 			char msg[VS_STATE_MSG_MAX];
 			vs_getState(&S.vehicle, &st, msg);
-			printf("  %6u ms  %-65s %s\n", H.ticks, H.act, msg);
+			uint32_t al[VS_ALARM_LIST_MAX];
+			char at[128];
+			alarms_text(at, sizeof at, al, unit_alarms(al));
+			printf("  %6u ms  %-65s %s [%s] servo %d\n", H.ticks, H.act, msg, at,
+			       S.vehicle.servo);
 		}
 		if (rc)
 			return 1;

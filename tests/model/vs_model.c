@@ -285,7 +285,8 @@ static unsigned expect_move(vm_t *m, const vm_call_t *c)
 		 * docs/states.md). */
 		if (m->nq > 0)
 			return refuse(m, W_MOVING);
-		if (m->brake_left_ms > 0 && !host_work(m)) {
+		/* A stop while the servo comes on completes once it is on. */
+		if ((m->brake_left_ms > 0 && !host_work(m)) || m->servo_wait) {
 			m->refuse[m->nrefuse++] = W_MOVING;
 			return 3u;
 		}
@@ -304,7 +305,8 @@ static unsigned expect_move(vm_t *m, const vm_call_t *c)
 			return refuse(m, g);
 		if (m->nq > 0)
 			return refuse(m, W_MOVING);
-		if (m->brake_left_ms > 0 && !host_work(m)) {
+		/* A stop while the servo comes on completes once it is on. */
+		if ((m->brake_left_ms > 0 && !host_work(m)) || m->servo_wait) {
 			m->refuse[m->nrefuse++] = W_MOVING;
 			return 3u;
 		}
@@ -500,6 +502,9 @@ void vm_input(vm_t *m, vm_input_t in, bool on)
 		m->drive_latched |= 1u << m->in_axis;
 		break;
 	case VM_IN_STICK:
+		/* Let go while driving: the joystick's motion brakes. */
+		if (!on && stick_drives(m))
+			m->brake_left_ms = m->c.brake_ms;
 		m->stick_deflected = on;
 		break;
 	case VM_IN_STICK_LOST:
