@@ -45,6 +45,7 @@ static struct {
 	bool caution;
 	fx_twist_t prev;
 	double prev_wx, prev_wy; /* world frame, mm/s */
+	bool pushed;		 /* pushed since the servo came on */
 	fx_twist_t prev_acc;	 /* the last tick's change of the command */
 	bool acc_valid;
 	uint8_t mode_pre;
@@ -104,8 +105,7 @@ static int observe(void)
 	 * so is a following error (204) while pushes are being taken back. */
 	if (n > 0 && codes[0] == 154 && (M.nalarm == 0 || M.alarm[0] != 154))
 		vm_refused(&M, 154);
-	if (n > 0 && codes[0] == 204 && M.settle_left_ms > 0 &&
-	    (M.nalarm == 0 || M.alarm[0] != 204))
+	if (n > 0 && codes[0] == 204 && H.pushed && (M.nalarm == 0 || M.alarm[0] != 204))
 		vm_plant_fault(&M, 204);
 	if (!same_alarms(&M, codes, n)) {
 		char a[128], b[128];
@@ -224,6 +224,9 @@ static bool trace;
 
 static int tick(void)
 {
+	/* The servo off drops what a push left (servo on starts afresh). */
+	if (!S.vehicle.servo)
+		H.pushed = false;
 	sim_tick(&S);
 	vm_tick(&M);
 	H.ticks++;
@@ -505,6 +508,7 @@ static int do_input(rd_t *r)
 		double dx = (double)(int8_t)a / 8.0;
 		plant_push(pl, dx, vs_config_omni(&S.cfg) ? -dx / 2 : 0, dx / 16);
 		vm_input(&M, VM_IN_PUSH, true);
+		H.pushed = true;
 		snprintf(H.act, sizeof H.act, "push %.2f mm", dx);
 		break;
 	}
@@ -591,6 +595,7 @@ static void setup(uint8_t mode)
 	H.caution = false;
 	H.prev = (fx_twist_t){0, 0, 0};
 	H.prev_wx = H.prev_wy = 0;
+	H.pushed = false;
 	H.prev_acc = (fx_twist_t){0, 0, 0};
 	H.acc_valid = false;
 	H.mode_pre = 0;
