@@ -128,8 +128,10 @@ static void drop_host_work(vm_t *m)
 static void stop_motion(vm_t *m)
 {
 	/* Work held by a pause is dropped in the next tick: Busy until then. */
-	if (vm_may_move(m) || host_work(m))
+	if (vm_may_move(m) || host_work(m)) {
 		m->brake_left_ms = m->c.brake_ms;
+		m->stop_pending = true;
+	}
 	drop_host_work(m);
 	m->paused = false;
 	m->stick_armed = false;
@@ -603,6 +605,7 @@ void vm_heard(vm_t *m)
 void vm_tick(vm_t *m)
 {
 	uint32_t ms = m->c.tick_us / 1000u ? m->c.tick_us / 1000u : 1u;
+	m->stop_pending = false;
 	sample_inputs(m);
 	/* The link watchdog covers every host-commanded motion, whatever the
 	 * joystick flag; a paused unit holds still (faults.md). */
@@ -711,7 +714,9 @@ void vm_observe(vm_t *m, int code)
 	case 0x15:
 	case 0x14:
 	case 0x17:
-		m->brake_left_ms = 0;
+		/* At rest; a stop not yet taken by a tick still brakes after. */
+		if (!m->stop_pending)
+			m->brake_left_ms = 0;
 		m->settle_left_ms = 0;
 		break;
 	default:

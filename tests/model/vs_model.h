@@ -80,6 +80,8 @@ typedef struct {
 	 * for them (wait_ms so far); a position lost to a reboot. */
 	uint32_t held, rebooted, in_reboot;
 	bool servo_wait, pose_lost;
+	/* A stop with work to drop, before the tick that drops it. */
+	bool stop_pending;
 	uint32_t wait_ms; /* a push: the hold may be busy this long */
 	uint32_t silent_ms;
 	bool wd_open;
