@@ -576,10 +576,12 @@ static void setup(uint8_t mode)
 	    .has_estop = cfg.has_estop,
 	    .has_joystick = cfg.has_joystick,
 	};
-	/* From the velocity limit at the acceleration limit (under jerk limits
-	 * the ramps add v/a), then settling. */
-	double brake_s = cfg.vel_limit_t_mm_s / cfg.acc_limit_t_mm_s2;
-	double rot_s = cfg.vel_limit_r_deg_s / cfg.acc_limit_r_deg_s2;
+	/* From the velocity limit at the set acceleration (the velocity modes'
+	 * own stops brake at it; under jerk limits the ramps add v/a), then
+	 * settling. */
+	double brake_s = cfg.vel_limit_t_mm_s / cfg.acc_default_t_mm_s2;
+	double rot_s = cfg.vel_limit_r_deg_s / cfg.acc_default_r_deg_s2;
+	c.settle_ms = cfg.settle_timeout_ms + cfg.position_window_ms + 200u;
 	c.brake_ms = (uint32_t)(1000.0 * 2.0 * fmax(brake_s, rot_s)) + cfg.settle_timeout_ms +
 		     cfg.position_window_ms + 200u;
 	for (unsigned i = 0; i < cfg.num_io; i++) {

@@ -412,6 +412,9 @@ void vm_apply(vm_t *m, const vm_call_t *c, bool reply)
 		m->jog = true;
 		m->jog_zero = a[0] == 0 && a[1] == 0 && a[2] == 0;
 		m->jog_left_ms = m->jog_timeout_ms;
+	} else if (op_is(c, "setAcceleration")) {
+		double s = fmax(m->c.vel_limit_t / a[0], m->c.vel_limit_r / a[1]);
+		m->c.brake_ms = (uint32_t)fmin(2000.0 * s, 1e9) + m->c.settle_ms;
 	} else if (op_is(c, "clearAlarm")) {
 		/* Clears every alarm and resets the drives' faults. */
 		m->nalarm = 0;

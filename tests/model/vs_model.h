@@ -37,6 +37,10 @@ typedef struct {
 	/* The longest a stop may take to come to rest and settle (from the
 	 * velocity limit at the acceleration limit, plus the settle time). */
 	uint32_t brake_ms;
+	/* Settling after a stop (settle time, window, margin): with the set
+	 * accelerations it makes brake_ms again after setAcceleration, since
+	 * a jog's or the stick's own stop brakes at the set acceleration. */
+	uint32_t settle_ms;
 	unsigned queue_cap;
 	double deadband; /* joystick, fraction of full scale */
 	uint32_t in_ids[VM_IO_MAX], out_ids[VM_IO_MAX];
