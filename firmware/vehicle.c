@@ -377,10 +377,12 @@ bool vs_setServo(vehicle_t *v, bool OnOff)
 	v->inpos_ticks = v->window_ticks;
 	v->settle_ticks = 0;
 	v->servo = true;
-	v->servo_wait = false;
-	v->servo_wait_ticks = 0;
-	for (uint8_t i = 0; VS_DRIVE_STATES && i < v->naxes; i++)
-		v->servo_wait |= !v->drive[i].enabled;
+	if (VS_DRIVE_STATES) {
+		v->servo_wait = false;
+		v->servo_wait_ticks = 0;
+		for (uint8_t i = 0; i < v->naxes; i++)
+			v->servo_wait |= !v->drive[i].enabled;
+	}
 	return true;
 }
 

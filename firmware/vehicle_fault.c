@@ -60,7 +60,8 @@ void vehicle_servo_off(vehicle_t *v)
 		v->wheel_cps_q8[i] = 0;
 	}
 	v->servo = false;
-	v->servo_wait = false;
+	if (VS_DRIVE_STATES)
+		v->servo_wait = false;
 }
 
 /* Every fault: drop the motion at once and switch the servo off (spec 6.9). */

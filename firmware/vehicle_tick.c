@@ -469,12 +469,12 @@ static void supervise_position(vehicle_t *v, int64_t ferr, const fx_twist_t *mov
 	}
 }
 
-/* The position hold is motion too. A wheel pushed more than a millimetre
- * off its reference is brought back as a move, not as a step to the loop
- * gain times the error: its setpoint stays within the speed in force (set
- * velocity, caution cap) and what it can brake from within the error, and
- * its magnitude rises by at most the set acceleration a tick. Settling
- * after a move (errors well under a millimetre) is left as it is. */
+/* The position hold is motion too. At rest every wheel's setpoint stays
+ * within the speed in force (set velocity, caution cap). A wheel pushed
+ * more than a millimetre off its reference is brought back as a move, not
+ * as a step to the loop gain times the error: within what it can brake
+ * from inside the error, its magnitude rising by at most the set
+ * acceleration a tick. Settling after a move is otherwise left as it is. */
 static void bound_hold(vehicle_t *v, const int32_t prev[])
 {
 	int64_t hz = v->cfg.tick_hz;
@@ -482,21 +482,24 @@ static void bound_hold(vehicle_t *v, const int32_t prev[])
 	int64_t far = cpm; /* 1 mm in counts, Q32 */
 	/* Plain comparisons: the fx helpers are out of line on a board, a
 	 * copy per file. */
+	/* The speed in force bounds every wheel at rest (a set velocity below
+	 * what the loop settles at included). */
+	int64_t cap = (fx_mul(motion_speed_cap(&v->motion), cpm) * hz) >> 24;
 	for (uint8_t i = 0; i < v->naxes; i++) {
 		int64_t err = v->kin.ref_counts_q32[i];
 		if (err < 0)
 			err = -err;
-		if (err <= far)
-			continue;
-		q32_t a_pt2 = fx_mul(motion_accel_set(&v->motion), cpm); /* counts/tick^2 */
-		int64_t step = ((a_pt2 * hz) >> 24) + 1;
-		int64_t b = (fx_mul(motion_speed_cap(&v->motion), cpm) * hz) >> 24;
-		int64_t u = (traj_umax(err, a_pt2) * hz) >> 24;
-		int64_t p = prev[i] < 0 ? -(int64_t)prev[i] : prev[i];
-		if (u < b)
-			b = u;
-		if (p + step < b)
-			b = p + step;
+		int64_t b = cap;
+		if (err > far) {
+			q32_t a_pt2 = fx_mul(motion_accel_set(&v->motion), cpm); /* counts/tick^2 */
+			int64_t step = ((a_pt2 * hz) >> 24) + 1;
+			int64_t u = (traj_umax(err, a_pt2) * hz) >> 24;
+			int64_t p = prev[i] < 0 ? -(int64_t)prev[i] : prev[i];
+			if (u < b)
+				b = u;
+			if (p + step < b)
+				b = p + step;
+		}
 		int32_t o = v->wheel_cps_q8[i];
 		v->wheel_cps_q8[i] = (int32_t)(o > b ? b : o < -b ? -b : o);
 	}
