@@ -426,6 +426,9 @@ void vm_apply(vm_t *m, const vm_call_t *c, bool reply)
 			m->brake_left_ms = m->c.brake_ms;
 		m->paused = true;
 		m->stick_armed = false;
+		/* A jog cannot wait for resume (as it is refused while paused,
+		 * 129): the pause ends it. */
+		m->jog = false;
 	} else if (op_is(c, "resume")) {
 		m->paused = false;
 	} else if (op_is(c, "stop")) {
