@@ -250,44 +250,6 @@ static double arg(rd_t *r, double scale)
 	return (double)(int8_t)u8(r) * scale;
 }
 
-static const char *const OPS[] = {
-    "clearAlarm",
-    "getAccelerationLimit",
-    "getActiveAlarm",
-    "getBatteryVoltage",
-    "getDefaultAcceleration",
-    "getDefaultVelocity",
-    "getIFVersion",
-    "getInput",
-    "getPosition",
-    "getServoStatus",
-    "getState",
-    "getVelocityLimit",
-    "getVersion",
-    "moveCircularRel",
-    "moveContinuousRel",
-    "moveCruiseAbs",
-    "moveForward",
-    "moveJog",
-    "moveLinearAbs",
-    "moveLinearRel",
-    "moveTurn",
-    "pause",
-    "resume",
-    "setAcceleration",
-    "setDigitalSensorLock",
-    "setJogTimeout",
-    "setJoystick",
-    "setOutput",
-    "setPosition",
-    "setPower",
-    "setServo",
-    "setVelocity",
-    "stop",
-    "unlock",
-};
-#define N_OPS (sizeof OPS / sizeof OPS[0])
-
 /* The operations a run needs most (power, servo, motion) come often. */
 static const char *pick_op(uint8_t k)
 {
@@ -297,7 +259,8 @@ static const char *pick_op(uint8_t k)
 	    "pause",	     "resume",	      "setJoystick",	   "clearAlarm"};
 	if (k < 2 * sizeof often / sizeof often[0])
 		return often[k / 2];
-	return OPS[k % N_OPS];
+	/* The 34 operations from the command table itself. */
+	return cmd_table[k % CMD_COUNT].name;
 }
 
 static int do_op(rd_t *r)
