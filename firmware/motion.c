@@ -166,6 +166,8 @@ void motion_stop(motion_t *m)
 	 * they are discarded once the unit is at rest, and commands queued
 	 * meanwhile run after that. */
 	m->stop_drop = m->q_count;
+	limits_changed(m);
+	m->stopping = true;
 	if (m->mode != MODE_PATH) {
 		/* Nothing queued is under way (a jog or a goal runs ahead of
 		 * it): it goes now, or it would run once the stop is done. */
@@ -174,9 +176,14 @@ void motion_stop(motion_t *m)
 		m->pass_todo = 0;
 		m->ln_next = LN_NEXT_NONE;
 		m->face_ok = false;
+		/* A jog or goal at rest (paused, or not yet ticked) has nothing
+		 * to brake: Ready at once, as the model of the spec has it. */
+		if (m->mode != MODE_JOYSTICK && twist_zero(&m->vel) && twist_zero(&m->vacc) &&
+		    (!ONLINE_JERK || !(m->sk_on[0] | m->sk_on[1]))) {
+			m->mode = MODE_IDLE;
+			m->stopping = false;
+		}
 	}
-	limits_changed(m);
-	m->stopping = true;
 	/* Spec 5 #33: stop ends in Ready, a pause included. */
 	m->paused = false;
 	m->vtarget = (fx_twist_t){0};

@@ -20,8 +20,10 @@ ARM_AR := $(ARM_PREFIX)ar
 ARM_NM := $(ARM_PREFIX)nm
 ARM_SIZE := $(ARM_PREFIX)size
 
-MCU_FLASH_BUDGET := 49152
-MCU_RAM_BUDGET := 12288
+# The application's room on a 128 KiB part, the rest kept for a boot
+# loader and the parameter pages.
+MCU_FLASH_BUDGET := 65536
+MCU_RAM_BUDGET := 16384
 # Targets whose build fails over budget: both, now that no image carries
 # soft double (the M0's was generic C, 6.6 KiB).
 MCU_BUDGET_ENFORCED := cortex-m4 cortex-m0

@@ -284,6 +284,28 @@ static void test_stop_in_jog_drops_queued_route(void **state)
 	EXPECT("moveJog 100 0 0", "ok true");
 }
 
+/* Found by the differential harness: a jog paused before it ever moved,
+ * then stopped, has nothing to brake: Ready at once, and the next command
+ * is not refused for a stop still under way. The same for a goal. */
+static void test_stop_at_rest_is_ready_at_once(void **state)
+{
+	(void)state;
+	ready();
+	EXPECT("moveJog 300 0 40", "ok true");
+	EXPECT("pause", "ok true");
+	EXPECT("getState", "ok true 21 \"Paused\"");
+	EXPECT("stop", "ok true");
+	EXPECT("getState", "ok true 16 \"Ready\"");
+	EXPECT("moveContinuousRel 500 0 0", "ok true");
+	EXPECT("pause", "ok true");
+	EXPECT("stop", "ok true");
+	EXPECT("getState", "ok true 16 \"Ready\"");
+	EXPECT("moveForward 10", "ok true");
+	sim_run_ms(&S, 1000);
+	EXPECT("getState", "ok true 16 \"Ready\"");
+	assert_true(fabs(odom_x() - 10.0) < 0.05);
+}
+
 /* 11: drive 0's power stage held off (an STO): servo on waits, the other
  * wheel never drives, and 500 ms on it is fault 211 naming drive 0 and its
  * state. */
@@ -375,6 +397,7 @@ int main(void)
 	    cmocka_unit_test_setup(test_mecanum_speed_is_a_vector, setup_omni),
 	    cmocka_unit_test_setup(test_stop_ends_pause, setup_diff),
 	    cmocka_unit_test_setup(test_stop_in_jog_drops_queued_route, setup_diff),
+	    cmocka_unit_test_setup(test_stop_at_rest_is_ready_at_once, setup_diff),
 	    cmocka_unit_test_setup(test_servo_on_waits_for_every_drive, setup_diff),
 	    cmocka_unit_test_setup(test_drive_leaving_enabled_stops_all, setup_diff),
 	    cmocka_unit_test_setup(test_drive_restart_loses_position, setup_diff),

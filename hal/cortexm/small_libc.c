@@ -1,7 +1,7 @@
 /* Byte-at-a-time string routines for the board, in place of newlib's
  * word-at-a-time ones: the link compares and measures short names and
  * lines (tens of bytes), where the unrolled forms buy little and cost
- * about 1.5 KiB of the 48 KiB flash budget. The linker takes these before
+ * about 1.5 KiB of flash. The linker takes these before
  * the library's. */
 #include <stddef.h>
 #include <stdint.h>

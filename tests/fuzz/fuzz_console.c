@@ -5,8 +5,9 @@
  * Checked for every line: at most one reply, and it is one printable line
  * starting "ok" or "error <code> "; an "error" reply leaves the unit
  * untouched (byte for byte); an "ok false" leaves the motion engine
- * untouched (refusals only raise a warning). '$wait' is capped so one input
- * stays fast.
+ * untouched (a refusal only raises a warning), unless the operation failed
+ * and raised a fault (setPower's relay, setServo's drives): a fault halts
+ * motion whatever raised it. '$wait' is capped so one input stays fast.
  */
 #include <stdint.h>
 #include <stdio.h>
@@ -56,12 +57,15 @@ static bool extra(void *ctx, int argc, char **argv, char *reply, size_t cap)
 	return sim_extra(ctx, argc, argv, reply, cap);
 }
 
-static bool is_set_power(const char *line, size_t n)
+/* setPower and setServo fail by raising a fault (the relay, the drives),
+ * which may be the one already in front of the list. */
+static bool may_fault(const char *line, size_t n)
 {
 	size_t i = 0;
 	while (i < n && (line[i] == ' ' || line[i] == '\t'))
 		i++;
-	return n - i >= 8 && strncasecmp(line + i, "setpower", 8) == 0;
+	return n - i >= 8 && (strncasecmp(line + i, "setpower", 8) == 0 ||
+			      strncasecmp(line + i, "setservo", 8) == 0);
 }
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
@@ -96,7 +100,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 			    memcmp(&before, &S.vehicle, sizeof before) != 0)
 				abort(); /* a rejected line changed the unit */
 			if (strcmp(out.last, "ok false\n") == 0 &&
-			    !is_set_power((const char *)data + start, n) &&
+			    !(may_fault((const char *)data + start, n) &&
+			      alarm_any_fault(&S.vehicle.alarms)) &&
 			    memcmp(&mbefore, &S.vehicle.motion, sizeof mbefore) != 0)
 				abort(); /* a refused operation touched the motion */
 		}

@@ -144,6 +144,9 @@ static double hyp(double a, double b)
 	return sqrt(a * a + b * b);
 }
 
+/* DIFF_TRACE: every step; DIFF_TICKS: every tick's command too. */
+static bool trace, ticks_trace;
+
 static int invariants(void)
 {
 	const vehicle_t *v = &S.vehicle;
@@ -185,6 +188,10 @@ static int invariants(void)
 				    "(turning %.1f)",
 				    dv, S.cfg.acc_limit_t_mm_s2, turn);
 	}
+	if (ticks_trace)
+		fprintf(stderr,
+			"  tick: v %.3f %.3f mm/s  w %.3f deg/s  heading %.3f deg  mode %d\n", vx,
+			vy, w, fxd(motion_ref_pose(&v->motion)->th_deg), motion_mode(&v->motion));
 	H.prev_wx = wx;
 	H.prev_wy = wy;
 	/* Jerk: in the velocity modes with jerks set, the change of the
@@ -219,8 +226,6 @@ static int invariants(void)
 	H.prev_servo = v->servo;
 	return 0;
 }
-
-static bool trace;
 
 static int tick(void)
 {
@@ -354,6 +359,12 @@ static int do_op(rd_t *r)
 	/* A new pose turns the world frame the velocity is compared in. */
 	if (ok && strcmp(c.op, "setPosition") == 0)
 		H.prev_servo = false;
+	/* A servo off between ticks (setServo, setPower, a fault) stops the
+	 * drives at once: the next command starts from rest. */
+	if (!S.vehicle.servo) {
+		H.prev = H.prev_acc = (fx_twist_t){0, 0, 0};
+		H.prev_wx = H.prev_wy = 0;
+	}
 	/* A new jerk or acceleration takes effect from the next tick. */
 	H.acc_valid = false;
 	if (ok && strcmp(c.op, "setVelocity") == 0) {
@@ -580,6 +591,7 @@ int diff_run(const uint8_t *data, size_t n, char *why, size_t cap)
 	if (cap)
 		why[0] = '\0';
 	trace = getenv("DIFF_TRACE") != NULL;
+	ticks_trace = getenv("DIFF_TICKS") != NULL;
 	setup(u8(&r));
 	n_actions = 0;
 	while (r.i < r.n && H.step < MAX_ACTIONS && H.ticks < MAX_TICKS) {
