@@ -146,7 +146,7 @@ typedef struct {
 	q32_t lim_cruise; /* lim_vmax plus its braking distance (-1: not yet) */
 	int64_t lim_n;	  /* the profile's last braking step count (traj_step_near) */
 	q32_t lim_j;	  /* the piece's jerk limit, 0 = unlimited */
-	/* Jerk-limited pieces (motion_path.c, sc_speed): the planned profile
+	/* Jerk-limited pieces (motion_profile.c): the planned profile
 	 * (sc_on below: it runs) and the last tick's change of speed. */
 	traj_sc_t sc;
 	q32_t acc;

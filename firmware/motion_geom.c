@@ -33,3 +33,13 @@ __attribute__((noinline)) q32_t motion_unit_dir(q32_t dx, q32_t dy, int32_t *ux,
 	}
 	return len;
 }
+
+/* The turn that faces cruise command c's waypoint from pose r (0: none,
+ * or no distance to it). */
+q32_t motion_cruise_face(const motion_cmd_t *c, const fx_pose_t *r)
+{
+	q32_t dx = c->target.x_mm - r->x_mm, dy = c->target.y_mm - r->y_mm;
+	if (fx_hypot(dx, dy) < TINY_MM)
+		return 0;
+	return fx_wrap_deg(fx_atan2_deg(dy, dx) - r->th_deg);
+}

@@ -220,7 +220,7 @@ bool motion_plan_corner(motion_t *m, uint8_t i)
 	q32_t rem = 0;
 	bool executing = (i == 0) && head_line_remaining(m, &rem);
 	/* A line running to rest under a jerk limit glides into the corner
-	 * (motion_path.c, motion_line_glide) unless it is in its last ramp,
+	 * (motion_ahead.c, motion_line_glide) unless it is in its last ramp,
 	 * which stops on the waypoint. */
 	if (executing && m->lim_j > 0 && (!ONLINE_JERK || !motion_line_may_blend(m)))
 		return false;

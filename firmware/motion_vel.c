@@ -1,89 +1,9 @@
-/* Motion engine: the velocity modes (jog, joystick, continuous goal), their
- * commands and their ticks. */
+/* Motion engine: the velocity modes' ticks (jog, joystick, continuous goal
+ * without jerk limits; under them the goal's law is motion_seek.c). Their
+ * commands are motion.c's. */
 #include "motion_priv.h"
 
 #include <stddef.h>
-
-/* The continuous goal honours the jerk settings (motion_seek.c). */
-static inline bool seek_jerk(const motion_t *m)
-{
-	return (m->j_t_pt3 | m->j_r_pt3) != 0;
-}
-
-static bool velocity_mode_allowed(const motion_t *m)
-{
-	return m->mode == MODE_IDLE || m->mode == MODE_JOG || m->mode == MODE_CONTINUOUS;
-}
-
-bool motion_jog(motion_t *m, q32_t vx, q32_t vy, q32_t w)
-{
-	if (!velocity_mode_allowed(m) || m->q_count > 0 || m->stopping || m->paused)
-		return false;
-	int64_t hz = m->p.tick_hz;
-	m->vtarget.vx_pt = vx / hz;
-	m->vtarget.vy_pt = vy / hz;
-	m->vtarget.w_pt = w / hz;
-	m->jog_age_ticks = 0;
-	m->mode = MODE_JOG;
-	return true;
-}
-
-bool motion_continuous_rel(motion_t *m, const fx_pose_t *rel)
-{
-	if (!velocity_mode_allowed(m) || m->q_count > 0 || m->stopping)
-		return false;
-	fx_pose_t t = motion_rel_to_abs(&m->ref, rel);
-	m->goal = t;
-	m->goal_position_done = false;
-	/* From rest the first tick picks the direction; a retarget keeps the
-	 * one the unit is driving in. */
-	if (m->mode != MODE_CONTINUOUS)
-		m->goal_reverse = false;
-	m->mode = MODE_CONTINUOUS;
-	if (ONLINE_JERK && seek_jerk(m))
-		motion_seek_retarget(m);
-	return true;
-}
-
-void motion_joystick_enable(motion_t *m, bool on)
-{
-	if (on == m->joystick)
-		return;
-	m->joystick = on;
-	if (on) {
-		/* The joystick takes over as stop() would: host motion brakes at
-		 * the limit and its queue is dropped; the joystick drives from
-		 * rest (motion_tick hands over once idle). */
-		if (m->mode == MODE_IDLE) {
-			m->mode = MODE_JOYSTICK;
-			m->paused = false;
-		} else {
-			motion_stop(m);
-		}
-		m->vtarget = (fx_twist_t){0};
-	} else if (m->mode == MODE_JOYSTICK) {
-		/* Decelerate at the acceleration limit, then idle; at rest idle
-		 * now (a command sent next is not refused for a stop). */
-		m->vtarget = (fx_twist_t){0};
-		if (motion_is_moving(m))
-			m->stopping = true;
-		else
-			m->mode = MODE_IDLE;
-	}
-}
-
-void motion_joystick_input(motion_t *m, int16_t x, int16_t y, int16_t r, bool present)
-{
-	if (m->mode != MODE_JOYSTICK || m->stopping)
-		return;
-	if (!present) {
-		m->vtarget = (fx_twist_t){0};
-		return;
-	}
-	m->vtarget.vx_pt = vt_eff(m) / 32767 * x;
-	m->vtarget.vy_pt = KIN_OMNI(m->p.kin) ? vt_eff(m) / 32767 * y : 0;
-	m->vtarget.w_pt = m->v_r_pt / 32767 * r;
-}
 
 /* Move x toward target by at most step. */
 FX_HELPER q32_t slew(q32_t x, q32_t target, q32_t step)

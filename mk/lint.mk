@@ -11,7 +11,11 @@
 #               uses the command table and the encodings, never the unit
 #   includes    the folder rules of docs/architecture.md (tools/lint/includes.py)
 #   fnsize      no function of firmware/ over 80 body lines or nested deeper
-#               than 4 (tools/lint/fnsize.py)
+#               than 4, no file over 800 lines (tools/lint/fnsize.py)
+#   objdeps     no cycle of symbol use among the objects of firmware/, nor
+#               among those of proto/: two files that use each other's
+#               symbols, or a lower layer that calls back up
+#               (tools/lint/objdeps.py, with its self-test)
 # Every tracked C file is in one of the sets below:
 #   LINT_SRC       host code, all checks: firmware/, proto/, hal/posix/,
 #                  hal/linux/, host_sim/ (devices too), the tools and
@@ -34,9 +38,11 @@ LINT_MCU_DEFS := -std=c11 -I. --target=arm-none-eabi -mcpu=cortex-m4 -mthumb -ff
 	-DMOTION_QUEUE_LEN=16 -isystem /usr/lib/arm-none-eabi/include
 CLANG ?= clang
 
-.PHONY: lint lint-cppcheck lint-tidy lint-warnings lint-format lint-client lint-includes lint-sets lint-fnsize
+.PHONY: lint lint-cppcheck lint-tidy lint-warnings lint-format lint-client lint-includes lint-sets lint-fnsize \
+	lint-objdeps
 
-lint: lint-sets lint-format lint-includes lint-cppcheck lint-warnings lint-tidy lint-client lint-fnsize
+lint: lint-sets lint-format lint-includes lint-cppcheck lint-warnings lint-tidy lint-client lint-fnsize \
+	lint-objdeps
 
 # A C file that no set names fails: a new folder cannot slip past lint.
 lint-sets:
@@ -56,8 +62,16 @@ lint-includes:
 FNSIZE_SRC := $(FW_SRC) $(wildcard firmware/*.h)
 
 lint-fnsize:
-	@echo "  FNSIZE  firmware: 80 body lines, nesting depth 4"
+	@echo "  FNSIZE  firmware: 80 body lines, nesting depth 4, 800 lines a file"
 	$(Q)python3 tools/lint/fnsize.py $(FNSIZE_SRC)
+
+# The objects of the sources (not every .o in the folder: a file removed
+# leaves its object behind).
+lint-objdeps: $(call objs,$(FW_SRC) $(PROTO_SRC))
+	@echo "  OBJDEPS no cycle among the objects of firmware/, of proto/"
+	$(Q)python3 tools/lint/objdeps.py --self-test
+	$(Q)python3 tools/lint/objdeps.py firmware $(call objs,$(FW_SRC))
+	$(Q)python3 tools/lint/objdeps.py proto $(call objs,$(PROTO_SRC))
 
 # Every global symbol firmware/ defines, looked for in vehiclectl.
 lint-client: $(BUILD)/vehiclectl $(FW_LIB)

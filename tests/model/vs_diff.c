@@ -23,6 +23,16 @@
 static sim_t S;
 static vm_t M;
 static unsigned long n_actions;
+/* FNV-1a over every tick's command, drive setpoints, odometry, reference
+ * and mode: two builds that agree on it behaved the same, tick for tick. */
+static uint64_t tick_hash;
+
+static void hash_bytes(const void *p, size_t n)
+{
+	const uint8_t *b = p;
+	for (size_t i = 0; i < n; i++)
+		tick_hash = (tick_hash ^ b[i]) * 0x100000001b3ull;
+}
 
 typedef struct {
 	const uint8_t *p;
@@ -235,6 +245,13 @@ static int tick(void)
 	sim_tick(&S);
 	vm_tick(&M);
 	H.ticks++;
+	const vehicle_t *v = &S.vehicle;
+	uint8_t mode = motion_mode(&v->motion);
+	hash_bytes(&v->cmd, sizeof v->cmd);
+	hash_bytes(v->wheel_cps_q8, sizeof v->wheel_cps_q8);
+	hash_bytes(&v->odom, sizeof v->odom);
+	hash_bytes(motion_ref_pose(&v->motion), sizeof(fx_pose_t));
+	hash_bytes(&mode, 1);
 	if (H.grace_ms)
 		H.grace_ms--;
 	if (observe())
@@ -594,6 +611,7 @@ int diff_run(const uint8_t *data, size_t n, char *why, size_t cap)
 	ticks_trace = getenv("DIFF_TICKS") != NULL;
 	setup(u8(&r));
 	n_actions = 0;
+	tick_hash = 0xcbf29ce484222325ull;
 	while (r.i < r.n && H.step < MAX_ACTIONS && H.ticks < MAX_TICKS) {
 		uint8_t k = u8(&r);
 		H.step++;
@@ -624,4 +642,9 @@ int diff_run(const uint8_t *data, size_t n, char *why, size_t cap)
 unsigned long diff_last_actions(void)
 {
 	return n_actions;
+}
+
+uint64_t diff_last_hash(void)
+{
+	return tick_hash;
 }

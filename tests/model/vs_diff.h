@@ -30,5 +30,8 @@
 int diff_run(const uint8_t *data, size_t n, char *why, size_t cap);
 /* Actions of the last run, for the figures of a long run. */
 unsigned long diff_last_actions(void);
+/* A hash of every tick of the last run (command, setpoints, odometry,
+ * reference, mode): a change that should not change behaviour keeps it. */
+uint64_t diff_last_hash(void);
 
 #endif

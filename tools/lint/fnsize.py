@@ -1,11 +1,13 @@
 #!/usr/bin/env python3
 """Function size check for C sources (make lint-fnsize).
 
-    tools/lint/fnsize.py [--max-lines N] [--max-depth N] [--list] FILE...
+    tools/lint/fnsize.py [--max-lines N] [--max-depth N] [--max-file-lines N]
+                         [--list] FILE...
 
 Fails (exit 1) naming every function whose body is longer than --max-lines
-(default 80) or nested deeper than --max-depth (default 4); prints nothing
-and exits 0 when all are within. --list also prints every function: body
+(default 80) or nested deeper than --max-depth (default 4), and every file
+longer than --max-file-lines (default 800); prints nothing and exits 0 when
+all are within. --list also prints every function: body
 lines, depth, file:line, name.
 
 Body lines: the lines between the line of the opening brace and the line
@@ -151,6 +153,7 @@ def main(argv):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--max-lines", type=int, default=80)
     ap.add_argument("--max-depth", type=int, default=4)
+    ap.add_argument("--max-file-lines", type=int, default=800)
     ap.add_argument("--list", action="store_true", help="print every function's size")
     ap.add_argument("files", nargs="+")
     args = ap.parse_args(argv)
@@ -161,6 +164,10 @@ def main(argv):
         except (OSError, ValueError) as e:
             print("fnsize: %s" % e, file=sys.stderr)
             return 2
+        with open(path, encoding="utf-8") as f:
+            file_lines = sum(1 for _ in f)
+        if file_lines > args.max_file_lines:
+            over.append("%s: %d lines (at most %d)" % (path, file_lines, args.max_file_lines))
         for name, line, lines, depth in fns:
             if args.list:
                 print("%5d %2d %s:%d %s" % (lines, depth, path, line, name))
@@ -175,7 +182,8 @@ def main(argv):
         for o in over:
             print(o, file=sys.stderr)
         print(
-            "fnsize: %d function(s) too long or too deeply nested: split them" % len(over),
+            "fnsize: %d function(s) or file(s) too long or too deeply nested: split them"
+            % len(over),
             file=sys.stderr,
         )
         return 1

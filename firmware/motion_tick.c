@@ -1,62 +1,16 @@
 /* Motion engine: the tick. motion_tick dispatches on the mode; the path
  * mode executes the queued commands piece by piece (a turn, a line, an arc,
- * a cruise corner) on the profiles of traj.c. */
+ * a cruise corner) on the profiles of traj.c. Each command runs in stages,
+ * each setting up one piece: a cruise waypoint's turn and line here, with
+ * the corner set up as its line ends (the crossing is a cruise's dearest
+ * tick); the other commands' stages in motion_piece.c. */
 #include "motion_priv.h"
 
 #include <stddef.h>
 
-#define DEG_TO_RAD_Q32 ((q32_t)74961321) /* pi / 180 */
 /* Heading change below which a corner step turns its entry direction to
  * first order (0.002 deg: 3.5e-5 rad, squared half below 2^-30). */
 #define CORNER_SMALL_DEG ((q32_t)8589935)
-
-static void seg_line(motion_t *m, const fx_pose_t *from, q32_t tx, q32_t ty, q32_t th_end)
-{
-	seg_t *g = &m->seg;
-	*g = (seg_t){0};
-	g->kind = SEG_LINE;
-	g->p0 = *from;
-	g->len = motion_unit_dir(tx - from->x_mm, ty - from->y_mm, &g->ux, &g->uy);
-	g->p_end.x_mm = tx;
-	g->p_end.y_mm = ty;
-	/* Travel sign relative to the heading (moveForward may go backward). */
-	int32_t hs, hc;
-	fx_sincos_bam(fx_deg_to_bam(from->th_deg), &hs, &hc);
-	int64_t dot = (int64_t)g->ux * hc + (int64_t)g->uy * hs;
-	g->dir = dot < 0 ? -1 : 1;
-	g->dth = fx_wrap_deg(th_end - from->th_deg);
-	g->p_end.th_deg = fx_wrap_deg(from->th_deg + g->dth);
-	if (g->dth != 0)
-		g->omni_k = fx_div(g->len, fx_abs64(g->dth));
-}
-
-static void seg_turn(motion_t *m, q32_t angle)
-{
-	seg_t *g = &m->seg;
-	*g = (seg_t){0};
-	g->kind = SEG_TURN;
-	g->p0 = m->ref;
-	g->dir = angle < 0 ? -1 : 1;
-	g->len = fx_abs64(angle);
-	g->p_end = m->ref;
-	g->p_end.th_deg = fx_wrap_deg(m->ref.th_deg + angle);
-}
-
-/* Where cruise command c's straight part ends (its corner's entry, or its
- * waypoint), and its length from (x, y) along its direction: no square
- * root or division in the tick that blends into it. */
-static inline void cruise_line_end(const motion_cmd_t *c, fx_pose_t *e)
-{
-	q32_t t = c->has_corner ? c->corner.t_mm : 0;
-	e->x_mm = c->target.x_mm - fx_mul_q30(t, c->ux);
-	e->y_mm = c->target.y_mm - fx_mul_q30(t, c->uy);
-}
-
-static inline q32_t line_len_from(const motion_cmd_t *c, const fx_pose_t *e, q32_t x, q32_t y)
-{
-	q32_t len = fx_mul_q30(e->x_mm - x, c->ux) + fx_mul_q30(e->y_mm - y, c->uy);
-	return len > 0 ? len : 0;
-}
 
 /* The straight part of cruise command c, from the reference (its start, or
  * the previous corner's exit) along the direction planned when it was
@@ -80,147 +34,6 @@ static void cruise_line(motion_t *m, const motion_cmd_t *c)
 	g->len = line_len_from(c, &g->p_end, r->x_mm, r->y_mm);
 }
 
-/* The corner of cruise command c, from the reference: the piece still holds
- * c's line (cruise_line), so only the corner's own fields are set. */
-static void corner_piece(motion_t *m, const motion_cmd_t *c)
-{
-	seg_t *g = &m->seg;
-	g->kind = SEG_CORNER;
-	g->s = 0;
-	g->p0 = m->ref;
-	g->h = 0;
-	g->corner = c->corner;
-	g->len = 2 * c->corner.lh_mm;
-	g->p_end.x_mm = c->exit_x_mm;
-	g->p_end.y_mm = c->exit_y_mm;
-	g->p_end.th_deg = fx_wrap_deg(m->ref.th_deg + c->corner.phi_deg);
-}
-
-/* What one stage of a command did: set up a piece, found nothing to do
- * (its next stage runs), or found the command finished. */
-typedef enum { STAGE_DONE, STAGE_PIECE, STAGE_SKIP } stage_t;
-
-static stage_t forward_stage(motion_t *m, motion_cmd_t *c)
-{
-	const fx_pose_t *r = &m->ref;
-	if (c->stage++ > 0)
-		return STAGE_DONE;
-	seg_line(m, r, c->target.x_mm, c->target.y_mm, r->th_deg);
-	if (m->seg.len < TINY_MM)
-		return STAGE_SKIP;
-	return STAGE_PIECE;
-}
-
-static stage_t turn_stage(motion_t *m, motion_cmd_t *c)
-{
-	if (c->stage++ > 0)
-		return STAGE_DONE;
-	if (fx_abs64(c->angle_deg) < 1)
-		return STAGE_SKIP;
-	seg_turn(m, c->angle_deg);
-	return STAGE_PIECE;
-}
-
-static stage_t arc_stage(motion_t *m, motion_cmd_t *c)
-{
-	const fx_pose_t *r = &m->ref;
-	if (c->stage++ > 0)
-		return STAGE_DONE;
-	seg_t *g = &m->seg;
-	*g = (seg_t){0};
-	g->kind = SEG_ARC;
-	g->p0 = *r;
-	g->cx = c->cx_mm;
-	g->cy = c->cy_mm;
-	g->dir = c->angle_deg < 0 ? -1 : 1;
-	g->len = fx_abs64(c->angle_deg);
-	g->p_end = c->target;
-	q32_t radius = fx_hypot(r->x_mm - c->cx_mm, r->y_mm - c->cy_mm);
-	g->arc_k = fx_mul(radius, DEG_TO_RAD_Q32);
-	/* Rigid rotation about the centre c (body frame): the body
-	 * moves at w x (-c) = w (c.y, -c.x). */
-	g->arc_kx = fx_mul(c->sy_mm, DEG_TO_RAD_Q32);
-	g->arc_ky = -fx_mul(c->sx_mm, DEG_TO_RAD_Q32);
-	if (g->len < 1)
-		return STAGE_SKIP;
-	return STAGE_PIECE;
-}
-
-/* A line to a pose, omni base: translation and rotation together, unless
- * the move is mostly rotation (under 1 mm per degree): then the heading
- * would ride on a tiny path ratio, so turn first and then translate. */
-static stage_t line_stage_omni(motion_t *m, motion_cmd_t *c)
-{
-	const fx_pose_t *r = &m->ref;
-	q32_t dx = c->target.x_mm - r->x_mm, dy = c->target.y_mm - r->y_mm;
-	q32_t dist = fx_hypot(dx, dy);
-	q32_t a = fx_wrap_deg(c->target.th_deg - r->th_deg);
-	bool split = fx_abs64(a) > FX_ONE / 1000 && dist < fx_abs64(a);
-	switch (c->stage++) {
-	case 0:
-		if (dist >= TINY_MM && !split) {
-			c->stage = 2;
-			seg_line(m, r, c->target.x_mm, c->target.y_mm, c->target.th_deg);
-			return STAGE_PIECE;
-		}
-		if (fx_abs64(a) < 1)
-			return STAGE_SKIP;
-		seg_turn(m, a);
-		return STAGE_PIECE;
-	case 1:
-		if (dist < TINY_MM)
-			return STAGE_SKIP;
-		seg_line(m, r, c->target.x_mm, c->target.y_mm, r->th_deg);
-		return STAGE_PIECE;
-	default:
-		return STAGE_DONE;
-	}
-}
-
-/* A line to a pose, differential base: face the target, drive to it, turn
- * to the final heading. */
-static stage_t line_stage_diff(motion_t *m, motion_cmd_t *c)
-{
-	const fx_pose_t *r = &m->ref;
-	q32_t dx = c->target.x_mm - r->x_mm, dy = c->target.y_mm - r->y_mm;
-	q32_t dist = fx_hypot(dx, dy);
-	switch (c->stage++) {
-	case 0: {
-		if (dist < TINY_MM)
-			return STAGE_SKIP;
-		q32_t a = fx_wrap_deg(fx_atan2_deg(dy, dx) - r->th_deg);
-		if (fx_abs64(a) < 1)
-			return STAGE_SKIP;
-		seg_turn(m, a);
-		return STAGE_PIECE;
-	}
-	case 1:
-		if (dist < TINY_MM)
-			return STAGE_SKIP;
-		seg_line(m, r, c->target.x_mm, c->target.y_mm, r->th_deg);
-		return STAGE_PIECE;
-	case 2: {
-		q32_t a = fx_wrap_deg(c->target.th_deg - r->th_deg);
-		if (!c->has_heading || fx_abs64(a) < 1)
-			return STAGE_SKIP;
-		seg_turn(m, a);
-		return STAGE_PIECE;
-	}
-	default:
-		return STAGE_DONE;
-	}
-}
-
-/* The turn that faces cruise command c's waypoint from pose r (0: none,
- * or no distance to it). */
-static q32_t cruise_face(const motion_cmd_t *c, const fx_pose_t *r)
-{
-	q32_t dx = c->target.x_mm - r->x_mm, dy = c->target.y_mm - r->y_mm;
-	if (fx_hypot(dx, dy) < TINY_MM)
-		return 0;
-	return fx_wrap_deg(fx_atan2_deg(dy, dx) - r->th_deg);
-}
-
 /* A cruise waypoint: its line's start becomes known (and the corner into
  * it is planned) when it runs first; it turns to face along its line
  * unless it arrives out of a corner, then runs its line. */
@@ -242,11 +55,11 @@ static stage_t cruise_stage(motion_t *m, motion_cmd_t *c)
 		    m->face_to.x_mm == c->target.x_mm && m->face_to.y_mm == c->target.y_mm)
 			a = m->face_a; /* worked out ahead, from here */
 		else
-			a = cruise_face(c, r);
+			a = motion_cruise_face(c, r);
 		m->face_ok = false;
 		if (fx_abs64(a) < 1)
 			return STAGE_SKIP;
-		seg_turn(m, a);
+		motion_seg_turn(m, a);
 		return STAGE_PIECE;
 	}
 	case 1:
@@ -263,22 +76,9 @@ static stage_t cruise_stage(motion_t *m, motion_cmd_t *c)
 
 static stage_t command_stage(motion_t *m, motion_cmd_t *c)
 {
-	switch (c->kind) {
-	case MCMD_FORWARD:
-		return forward_stage(m, c);
-	case MCMD_TURN:
-		return turn_stage(m, c);
-	case MCMD_ARC:
-		return arc_stage(m, c);
-	case MCMD_LINE:
-		if (KIN_OMNI(m->p.kin))
-			return line_stage_omni(m, c);
-		return line_stage_diff(m, c);
-	case MCMD_CRUISE:
+	if (c->kind == MCMD_CRUISE)
 		return cruise_stage(m, c);
-	default:
-		return STAGE_DONE;
-	}
+	return motion_stage(m, c);
 }
 
 /* Sets up the next piece of the head command; false when it is finished. */
@@ -292,49 +92,20 @@ static bool next_piece(motion_t *m)
 	return st == STAGE_PIECE;
 }
 
-/* What a piece allows of a translational limit t (mm per tick, or per
- * tick squared) and a rotational limit r (deg alike), for the set limits
- * and the hard ones: speeds and accelerations take the same form. A turn
- * has r; an arc the lower of r and t over its mm per degree; a line whose
- * heading turns with the path (omni) the lower of t and r times its mm per
- * degree, kept 1/4096 below as omni_k is rounded; any other line t. A
- * corner's acceleration is the lower of t and half of r times its mm per
- * degree, the other half is the curvature change (traj.h,
- * traj_corner_rates); its speed cap is planned (corner_vrot). */
-static inline q32_t piece_limit(const seg_t *g, q32_t t, q32_t r)
+/* The corner of cruise command c, from the reference: the piece still holds
+ * c's line (cruise_line), so only the corner's own fields are set. */
+static void corner_piece(motion_t *m, const motion_cmd_t *c)
 {
-	switch (g->kind) {
-	case SEG_TURN:
-		return r;
-	case SEG_ARC:
-		return fx_min64(r, fx_div(t, g->arc_k));
-	case SEG_LINE:
-		if (g->dth != 0) {
-			q32_t rk = fx_mul(r, g->omni_k);
-			return fx_min64(t, rk - (rk >> 12));
-		}
-		return t;
-	case SEG_CORNER:
-		return fx_min64(t, fx_mul(r, g->corner.k_mm_deg) / 2);
-	default:
-		return t;
-	}
-}
-
-/* Stands in for an unlimited (0) jerk in piece_limit, which takes the
- * lower of two; a piece limit above JERK_REAL (the largest configurable
- * jerk at the slowest tick is about 2^35 raw) is none. */
-#define JERK_NONE ((q32_t)1 << 60)
-#define JERK_REAL ((q32_t)1 << 40)
-
-/* The active piece's jerk limit for translation and rotation jerks t, r
- * (0 = unlimited); 0 when neither limits it. */
-static q32_t piece_jerk(const seg_t *g, q32_t t, q32_t r)
-{
-	if (t == 0 && r == 0)
-		return 0;
-	q32_t j = piece_limit(g, t ? t : JERK_NONE, r ? r : JERK_NONE);
-	return j >= JERK_REAL ? 0 : j;
+	seg_t *g = &m->seg;
+	g->kind = SEG_CORNER;
+	g->s = 0;
+	g->p0 = m->ref;
+	g->h = 0;
+	g->corner = c->corner;
+	g->len = 2 * c->corner.lh_mm;
+	g->p_end.x_mm = c->exit_x_mm;
+	g->p_end.y_mm = c->exit_y_mm;
+	g->p_end.th_deg = fx_wrap_deg(m->ref.th_deg + c->corner.phi_deg);
 }
 
 /* Speed cap and acceleration of the active piece; a corner's are those the
@@ -469,23 +240,6 @@ static void twist_between(const motion_t *m, const fx_pose_t *a, const fx_pose_t
 	t->w_pt = dth;
 }
 
-/* True when the piece just finished flows into the next without stopping. */
-static bool blends_onward(motion_t *m, uint8_t finished_kind)
-{
-	if (m->q_count == 0)
-		return false;
-	motion_cmd_t *c = q_at(m, 0);
-	if (c->kind != MCMD_CRUISE || !c->has_corner)
-		return false;
-	return finished_kind == SEG_LINE || finished_kind == SEG_CORNER;
-}
-
-/* The profile that runs is dropped (braking, a new plan). */
-static void plan_drop(motion_t *m)
-{
-	m->sc_on = m->ln_on = m->glide = m->hold_on = false;
-}
-
 /* A stop came to rest: the commands it braked through are discarded. */
 static void stop_done(motion_t *m)
 {
@@ -496,16 +250,6 @@ static void stop_done(motion_t *m)
 		pop(m);
 	m->seg.kind = SEG_NONE;
 	m->mode = m->q_count ? MODE_PATH : MODE_IDLE;
-}
-
-/* The speed the active piece ends at under jerk limits: a cruise line's
- * corner speed (within the line's own cap, as traj_ln_plan takes it), or
- * rest. */
-static q32_t piece_cout(motion_t *m)
-{
-	if (m->seg.kind != SEG_LINE || !blends_onward(m, SEG_LINE))
-		return 0;
-	return fx_min64(q_at(m, 0)->vend_pt, m->lim_vmax - 1);
 }
 
 /* The line of rem from the present speed to cout at the piece's limits:
@@ -538,14 +282,6 @@ static bool plan_line(motion_t *m, q32_t rem, q32_t cout)
  * runs on to the corner's speed and the corner brakes. Raised, the line from the speed held
  * (zero acceleration: nothing steps) is planned at once; accelerating or
  * slowing, the profile runs on until it holds. */
-/* Whether the running plan is in its last ramp (the S-curve's, or the
- * line's into its end speed), where its speed only falls. */
-static bool last_ramp(const motion_t *m)
-{
-	const traj_ln_t *ln = &m->lnb[m->ln_i];
-	return m->sc_on ? m->sc.k >= m->sc.nv : ln->k > ln->l1 + ln->hold;
-}
-
 static void plan_new_limit(motion_t *m)
 {
 	if (m->hold_on) {
@@ -566,40 +302,6 @@ static void plan_new_limit(motion_t *m)
 		plan_drop(m);
 		m->glide = true;
 	}
-}
-
-/* A waypoint queued while a line runs to rest on its plan made the line a
- * blend (motion_plan_corner): it glides into the new corner (the
- * acceleration to zero at the jerk, then the line from that speed to the
- * corner's, as for a new speed limit), unless it is already in its last
- * ramp to rest, which runs on and stops on the waypoint (no corner is
- * fitted then). */
-bool motion_line_may_blend(const motion_t *m)
-{
-	return (m->sc_on || m->ln_on) && !last_ramp(m);
-}
-
-void motion_line_glide(motion_t *m)
-{
-	plan_drop(m);
-	m->glide = true;
-}
-
-/* A waypoint queued later can lower the speed of the corner the running
- * line brakes into (the line after it is short, the corner after that
- * sharp). The line's plan still ends at the old speed: it glides and plans
- * again from its speed; in its last ramp, which cannot turn round, it
- * brakes at the limits (and plans again at rest). */
-void motion_line_cout_check(motion_t *m)
-{
-	const traj_ln_t *ln = ln_run(m);
-	if (m->mode != MODE_PATH || m->seg.kind != SEG_LINE || !m->ln_on || m->lim_j == 0 ||
-	    ln->cout <= piece_cout(m))
-		return;
-	if (last_ramp(m))
-		plan_drop(m);
-	else
-		motion_line_glide(m);
 }
 
 /* A piece begun at speed (a cruise line or corner, under jerk limits): a
@@ -725,123 +427,6 @@ static q32_t sc_speed(motion_t *m, bool braking)
 	q32_t u = ONLINE_JERK && m->ln_on ? traj_ln_next(ln_run(m)) : traj_sc_next(&m->sc);
 	m->acc = u - m->v;
 	return u;
-}
-
-/* A cruise line's profile planned ahead (motion_plan_idle) for the length,
- * speeds and limits in ln_key; true when it planned. */
-static bool plan_ahead_at(motion_t *m, q32_t len, q32_t cin, q32_t cout, q32_t v, q32_t a, q32_t j)
-{
-	const q32_t key[6] = {len, cin, cout, v, a, j};
-	traj_ln_t *ln = ln_ahead(m);
-	if (len <= 0 || j == 0)
-		return false;
-	/* A key tried, planned or not, is not tried again; one being planned
-	 * goes on. */
-	bool same = m->ln_next != LN_NEXT_NONE;
-	for (int i = 0; i < 6; i++) {
-		same = same && key[i] == m->ln_key[i];
-		m->ln_key[i] = key[i];
-	}
-	if (same && m->ln_next != LN_NEXT_PART)
-		return false;
-	if (!same)
-		ln->n = 0;
-	/* A budget bounds the trial lines a call takes (the board's main loop
-	 * runs the tick between calls). */
-	int r = traj_ln_plan_part(ln, len, cin, cout, v, a, j,
-				  m->plan_budget ? m->plan_budget : INT64_MAX);
-	m->ln_next = r > 0 ? LN_NEXT_PLAN : r < 0 ? LN_NEXT_PART : LN_NEXT_KEY;
-	return true;
-}
-
-/* The profile of a cruise line that has yet to begin, at the line's
- * limits. */
-static bool plan_ahead(motion_t *m, q32_t len, q32_t cin, q32_t cout)
-{
-	return plan_ahead_at(m, len, cin, cout, vt_eff(m), m->a_t_pt2, m->j_t_pt3);
-}
-
-/* A line that glides (a waypoint queued, a new speed limit): the line from
- * the speed its glide ends at, for the tick after its acceleration reaches
- * zero (glide_step), planned ahead. From the change a0 = |acc| the glide
- * takes n = ceil(a0 / J) ticks, the k-th changing the speed by a_k =
- * a0 - k J (0 from the n-th); its speeds are v + sg A_k, A_k = k a0 -
- * J k (k + 1) / 2 for k < n and A_n = A_(n-1), and the sum of A_1 ..
- * A_(n-1) is a0 m (m + 1) / 2 - J m (m + 1) (m + 2) / 6 with m = n - 1. */
-static bool plan_glide(motion_t *m)
-{
-	q32_t a0 = fx_abs64(m->acc), j = m->lim_j, sg = m->acc < 0 ? -1 : 1;
-	int64_t n = (a0 + j - 1) / j, mm = n > 0 ? n - 1 : 0;
-	/* Beyond reason (a change of 2^36 raw a tick, a glide of 4096 ticks):
-	 * planned in the tick, as before. Within, the sums stay below 2^60
-	 * (J m < a0). */
-	if (n > 4096 || a0 > ((int64_t)1 << 36))
-		return false;
-	int64_t an = mm * a0 - j * (mm * (mm + 1) / 2);
-	int64_t sum = n ? a0 * (mm * (mm + 1) / 2) - j * (mm * (mm + 1) * (mm + 2) / 6) + an : 0;
-	q32_t v = m->v + sg * an, moved = n * m->v + sg * sum;
-	return plan_ahead_at(m, m->seg.len - m->seg.s - moved, v, piece_cout(m), m->lim_vmax,
-			     m->lim_a, m->lim_j);
-}
-
-/* The next cruise line's profile, planned ahead under jerk limits. The
- * head's line, before it begins, starts from rest where the unit stands
- * (a turn to face it moves no position) toward its corner's speed (one
- * that ends at rest runs the S-curve, planned in its first tick). Or the
- * line after the head's, while the head's line or corner runs: it begins
- * at the corner's exit after the corner's last step carried it o = n c -
- * R in, R what is left of the corner from the tick (2 Lh before it: a
- * line lands on its end on a tick) and the corner holding speed c, or
- * where a collinear pass's line ends, at that line's last speed. */
-bool motion_plan_next_line(motion_t *m)
-{
-	if (!ONLINE_JERK || m->mode != MODE_PATH || m->q_count == 0 || m->stopping || m->paused ||
-	    !m->jerk_any)
-		return false;
-	if (m->glide && m->seg.kind == SEG_LINE && m->lim_ok && m->lim_j > 0)
-		return plan_glide(m);
-	const motion_cmd_t *c0 = q_at(m, 0);
-	if (c0->kind != MCMD_CRUISE || !c0->start_known)
-		return false;
-	fx_pose_t e;
-	q32_t v = vt_eff(m);
-	if (c0->stage < 2) {
-		if (c0->stage == 0 && !m->face_ok) {
-			/* Its first tick's turn to face it, with the line's. */
-			m->face_ref = m->ref;
-			m->face_to = c0->target;
-			m->face_a = cruise_face(c0, &m->ref);
-			m->face_ok = true;
-			return true;
-		}
-		if (!c0->has_corner || c0->vend_pt == 0)
-			return false;
-		cruise_line_end(c0, &e);
-		q32_t len = line_len_from(c0, &e, m->ref.x_mm, m->ref.y_mm);
-		return plan_ahead(m, len, 0, fx_min64(c0->vend_pt, v - 1));
-	}
-	const motion_cmd_t *c1 = q_at(m, 1);
-	if (m->q_count < 2 || m->lim_j == 0 || !c0->has_corner || c1->kind != MCMD_CRUISE ||
-	    !c1->start_known || c0->stage != 2)
-		return false;
-	q32_t c, lh2 = 2 * c0->corner.lh_mm;
-	if (m->seg.kind == SEG_LINE && m->ln_on)
-		c = lh2 ? ln_run(m)->cout : ln_run(m)->cout + (ln_run(m)->r > 0);
-	else if (m->seg.kind == SEG_CORNER && m->hold_on)
-		c = m->hold_v;
-	else
-		return false;
-	if (c <= 0)
-		return false;
-	cruise_line_end(c1, &e);
-	q32_t x = lh2 ? c0->exit_x_mm : c0->target.x_mm;
-	q32_t y = lh2 ? c0->exit_y_mm : c0->target.y_mm;
-	/* In the corner already, what is left of it from this tick on: it
-	 * may have been entered mid-tick (straight from the corner before). */
-	q32_t left = m->seg.kind == SEG_CORNER ? lh2 - m->seg.s : lh2;
-	q32_t o = lh2 ? ((left + c - 1) / c) * c - left : 0;
-	q32_t cout = c1->has_corner ? fx_min64(c1->vend_pt, v - 1) : 0;
-	return plan_ahead(m, line_len_from(c1, &e, x, y) - o, c, cout);
 }
 
 /* The three parts of path_tick below are inline by force: left to the
