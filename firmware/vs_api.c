@@ -14,7 +14,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "vehicle.h"
+#include "vehicle_priv.h"
 
 #define POS_MAX_MM    VS_REAL(1e6)
 #define ANGLE_MAX_DEG VS_REAL(36000.0)
@@ -311,9 +311,11 @@ bool vs_setAcceleration(vehicle_t *v, vs_velocity_t accel)
 		e = er;
 	if (e != 0)
 		return vehicle_refuse(v, "setAcceleration", e);
-	/* Moving = Busy (or Avoid); a unit paused at rest may take it. */
+	/* Moving = Busy (or Avoid), waiting for the drives to enable included;
+	 * a unit paused at rest may take it. */
 	if (motion_is_moving(&v->motion) ||
-	    (motion_has_work(&v->motion) && !motion_is_paused(&v->motion)))
+	    (motion_has_work(&v->motion) && !motion_is_paused(&v->motion)) ||
+	    vehicle_servo_waiting(v))
 		return vehicle_refuse(v, "setAcceleration", ALM_W_MOVING);
 	motion_set_accel(&v->motion, to_q32(accel.translation), to_q32(accel.rotation));
 	v->acc_set = accel;

@@ -318,9 +318,13 @@ static void test_servo_on_waits_for_every_drive(void **state)
 	EXPECT("getState", "ok true 17 \"Busy\"");
 	EXPECT("getServoStatus 0", "ok true false");
 	EXPECT("getServoStatus 1", "ok true true");
+	/* Busy, nothing queued: the accelerations stay (spec 5 #24). */
+	EXPECT("setAcceleration 500 90", "ok false");
+	EXPECT("getActiveAlarm 1",
+	       "ok true 1 1 122 warning \"setAcceleration refused: unit moving\"");
 	EXPECT("moveForward 100", "ok false");
 	EXPECT("getActiveAlarm 1",
-	       "ok true 1 1 120 warning \"moveForward refused: unit not ready\"");
+	       "ok true 2 1 120 warning \"moveForward refused: unit not ready\"");
 	EXPECT("moveLinearAbs 100 0 0", "ok true"); /* queued: it waits */
 	for (int t = 0; t < 500; t++) {
 		sim_tick(&S);
@@ -329,7 +333,7 @@ static void test_servo_on_waits_for_every_drive(void **state)
 	}
 	EXPECT("getState", "ok true 17 \"Busy\"");
 	sim_tick(&S); /* the 501st tick: past servo_on_timeout_ms */
-	EXPECT("getActiveAlarm 1", "ok true 2 1 211 fault \"drive 0 not enabled: Switched on\"");
+	EXPECT("getActiveAlarm 1", "ok true 3 1 211 fault \"drive 0 not enabled: Switched on\"");
 	EXPECT("getState", "ok true 19 \"Alarm-211\"");
 	EXPECT("$sim pose", "ok pose 0.000 0.000 0.000");
 	/* Released: servo on completes at once, the queue went with the fault. */

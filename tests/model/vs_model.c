@@ -345,8 +345,9 @@ unsigned vm_expect(vm_t *m, const vm_call_t *c)
 		uint32_t e = settings(c->a[0], c->a[1], m->c.acc_limit_t, m->c.acc_limit_r);
 		if (e)
 			return refuse(m, e);
-		/* false while moving (Busy, Avoid): a paused unit at rest takes it. */
-		if (host_work(m) && can_run(m) && !m->paused)
+		/* false while moving (Busy, Avoid), servo on's wait for the drives
+		 * (Busy) included: a paused unit at rest takes it. */
+		if ((host_work(m) && can_run(m) && !m->paused) || m->servo_wait)
 			return refuse(m, W_MOVING);
 		if (vm_may_move(m)) {
 			m->refuse[m->nrefuse++] = W_MOVING;
