@@ -228,8 +228,25 @@ static void supervise_enable(vehicle_t *v)
 	}
 }
 
-__attribute__((noinline)) void vehicle_sample_drives(vehicle_t *v)
+/* A drive restarted, reports a fault or no longer does. */
+static void drive_news(vehicle_t *v, uint8_t i, const hal_drive_state_t *st)
 {
+	if (VS_DRIVE_STATES && st->position_lost) {
+		v->kin.last_meas[i] = st->position_counts;
+		drive_restarted(v, i);
+	}
+	uint16_t fc = v->powered ? st->fault_code : 0;
+	if (fc != 0 && fc != v->drive_fault_reported[i])
+		drive_fault_report(v, i, fc);
+	v->drive_fault_reported[i] = fc;
+}
+
+/* Reads every drive; true when every one reports enabled. Inline in the
+ * tick (a call and the loop's frame cost the cruise tick 20 instructions,
+ * tools/bench/tickcost.sh); servo on calls it out of line. */
+static inline __attribute__((always_inline)) bool sample_drives(vehicle_t *v)
+{
+	bool all_on = true;
 	/* Each drive's condition is reported once per occurrence (and again
 	 * after clearAlarm while it persists), so two faulted drives do not
 	 * take turns at the front of the list every tick. */
@@ -243,22 +260,27 @@ __attribute__((noinline)) void vehicle_sample_drives(vehicle_t *v)
 			    !v->drive_timeout_reported[i])
 				drive_silent_report(v, i);
 			supervise_encoder(v, i, false);
-			continue;
+			st.enabled = v->drive[i].enabled; /* as last reported */
+		} else {
+			v->drive_silent_ticks[i] = 0;
+			v->drive_timeout_reported[i] = false;
+			v->drive[i] = st;
+			supervise_encoder(v, i, st.position_counts != v->meas_counts[i]);
+			v->meas_counts[i] = st.position_counts;
+			/* One test for the rare: a restart, a fault, one that
+			 * ended. */
+			if ((st.fault_code | v->drive_fault_reported[i] |
+			     (VS_DRIVE_STATES && st.position_lost)) != 0)
+				drive_news(v, i, &st);
 		}
-		v->drive_silent_ticks[i] = 0;
-		v->drive_timeout_reported[i] = false;
-		v->drive[i] = st;
-		supervise_encoder(v, i, st.position_counts != v->meas_counts[i]);
-		v->meas_counts[i] = st.position_counts;
-		if (VS_DRIVE_STATES && st.position_lost) {
-			v->kin.last_meas[i] = st.position_counts;
-			drive_restarted(v, i);
-		}
-		uint16_t fc = v->powered ? st.fault_code : 0;
-		if (fc != 0 && fc != v->drive_fault_reported[i])
-			drive_fault_report(v, i, fc);
-		v->drive_fault_reported[i] = fc;
+		all_on &= st.enabled;
 	}
+	return all_on;
+}
+
+__attribute__((noinline)) void vehicle_sample_drives(vehicle_t *v)
+{
+	(void)sample_drives(v);
 }
 
 /* "battery below N.N V" as a fault (critical) or a warning (low). */
@@ -516,11 +538,11 @@ bool vehicle_in_position(const vehicle_t *v)
 void vehicle_tick(vehicle_t *v, uint32_t now_us)
 {
 	check_lateness(v, now_us);
-	vehicle_sample_drives(v);
+	bool all_on = sample_drives(v);
 	supervise_inputs(v);
 	/* After the inputs: a relay that opened is a power fault, not a drive
 	 * that left Operation enabled. */
-	if (VS_DRIVE_STATES && v->servo)
+	if (VS_DRIVE_STATES && v->servo && (!all_on || v->servo_wait))
 		supervise_enable(v);
 	supervise_link(v);
 	feed_joystick(v);
@@ -530,24 +552,28 @@ void vehicle_tick(vehicle_t *v, uint32_t now_us)
 	 * loop holds the unit there: one owner of where the unit is. Only with
 	 * the servo off (wheels free) does it follow the odometry. */
 	/* While the servo comes on the motion waits (nothing to drive yet). */
-	if (v->servo && vehicle_servo_waiting(v))
-		cmd = (fx_twist_t){0, 0, 0};
-	else
-		motion_tick(&v->motion, v->servo ? NULL : &v->odom, &cmd);
-	if (!v->servo || vehicle_servo_waiting(v)) {
+	bool drive = v->servo && !vehicle_servo_waiting(v);
+	if (drive) {
+		motion_tick(&v->motion, NULL, &cmd);
+	} else {
 		/* Nothing may move with the servo off; the odometry still
 		 * follows wheels pushed by hand. */
+		if (!v->servo)
+			motion_tick(&v->motion, &v->odom, &cmd);
 		cmd = (fx_twist_t){0, 0, 0};
 	}
 	v->cmd = cmd;
 
 	fx_twist_t delta;
 	int64_t ferr;
+	/* At rest the hold is bounded from the setpoints of the tick before. */
+	bool hold = v->servo && (cmd.vx_pt | cmd.vy_pt | cmd.w_pt) == 0;
 	int32_t prev[VS_MAX_AXES];
-	for (uint8_t i = 0; i < v->naxes; i++)
-		prev[i] = v->wheel_cps_q8[i];
+	if (hold)
+		for (uint8_t i = 0; i < v->naxes; i++)
+			prev[i] = v->wheel_cps_q8[i];
 	kin_step(&v->kin, &cmd, v->meas_counts, v->wheel_cps_q8, &delta, &ferr);
-	if (v->servo && (cmd.vx_pt | cmd.vy_pt | cmd.w_pt) == 0)
+	if (hold)
 		bound_hold(v, prev);
 	odom_integrate(&v->odom, &delta, &v->odom_trig);
 
@@ -555,7 +581,7 @@ void vehicle_tick(vehicle_t *v, uint32_t now_us)
 		following_fault(v, ferr);
 	supervise_position(v, ferr, &delta);
 
-	if (!v->servo || vehicle_servo_waiting(v))
+	if (!drive)
 		for (uint8_t i = 0; i < v->naxes; i++)
 			v->wheel_cps_q8[i] = 0;
 	for (uint8_t i = 0; i < v->naxes; i++)
