@@ -8,12 +8,12 @@
 
 /* Row positions, to prove at compile time that opcodes are 1..N in order. */
 enum {
-#define VS_CMD(name, op, it, in, ot, on, help) CMD_IDX_##name,
+#define VS_CMD(name, op, it, in, ot, on, idl, help) CMD_IDX_##name,
 #include "commands.def"
 #undef VS_CMD
 };
 
-#define VS_CMD(name, op, it, in, ot, on, help)                                                     \
+#define VS_CMD(name, op, it, in, ot, on, idl, help)                                                \
 	_Static_assert(CMD_IDX_##name + 1 == (op), "opcode of " #name " is not its row number");   \
 	_Static_assert(sizeof(it) - 1 <= CMD_MAX_FIELDS, #name ": too many in fields");            \
 	_Static_assert(sizeof(ot) - 1 <= CMD_MAX_FIELDS, #name ": too many out fields");
@@ -29,9 +29,9 @@ enum {
 #endif
 
 const cmd_def_t cmd_table[CMD_COUNT] = {
-#define VS_CMD(name, op, it, in, ot, on, help)                                                     \
-	{#name, op, (uint8_t)(sizeof(it) - 1), (uint8_t)(sizeof(ot) - 1), it,                      \
-	 in,	ot, on CMD_HELP(help)},
+#define VS_CMD(name, op, it, in, ot, on, idl, help)                                                \
+	{#name, op, (uint8_t)(sizeof(it) - 1), (uint8_t)(sizeof(ot) - 1), it, in,                  \
+	 ot,	on, idl CMD_HELP(help)},
 #include "commands.def"
 #undef VS_CMD
 };

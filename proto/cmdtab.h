@@ -38,7 +38,7 @@ typedef enum {
 
 /* Opcodes, CMD_OP_<name>, fixed by the table. */
 enum {
-#define VS_CMD(name, op, it, in, ot, on, help) CMD_OP_##name = (op),
+#define VS_CMD(name, op, it, in, ot, on, idl, help) CMD_OP_##name = (op),
 #include "commands.def"
 #undef VS_CMD
 };
@@ -46,7 +46,7 @@ enum {
 enum {
 	CMD_COUNT = 0
 /* One "+1" term per row; a fragment of the sum, so it cannot be parenthesised. */
-#define VS_CMD(name, op, it, in, ot, on, help) +1 /* NOLINT(bugprone-macro-parentheses) */
+#define VS_CMD(name, op, it, in, ot, on, idl, help) +1 /* NOLINT(bugprone-macro-parentheses) */
 #include "commands.def"
 #undef VS_CMD
 };
@@ -59,6 +59,7 @@ typedef struct {
 	const char *in_names; /* space-separated field names */
 	const char *out_types;
 	const char *out_names;
+	const char *idl; /* the IDL's parameter list: "in double x_" */
 #ifndef VS_NO_HELP_TEXT
 	const char *help;
 #endif

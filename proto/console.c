@@ -337,29 +337,6 @@ static void rb_pose(rbuf_t *r, const fx_pose_t *p)
 	rb_q32(r, p->th_deg);
 }
 
-/* "boolean name(in double x_, out short state, ...)" */
-static void rb_signature(rbuf_t *r, const cmd_def_t *d)
-{
-	bool first = true;
-
-	rb_printf(r, "boolean %s(", d->name);
-	for (int dir = 0; dir < 2; dir++) {
-		const char *types = dir ? d->out_types : d->in_types;
-		const char *names = dir ? d->out_names : d->in_names;
-		unsigned n = dir ? d->n_out : d->n_in;
-
-		for (unsigned i = 0; i < n; i++) {
-			const char *fn;
-			size_t fl = cmd_field_name(names, i, &fn);
-
-			rb_printf(r, "%s%s %s %.*s", first ? "" : ", ", dir ? "out" : "in",
-				  cmd_type_idl(types[i]), (int)fl, fn);
-			first = false;
-		}
-	}
-	rb_puts(r, ")");
-}
-
 #ifndef VS_NO_CONFIG_EXTRA
 /* "ok" and " NAME" for every row of the configuration table: the list of
  * $config fits one reply (a char per byte of " NAME", as the NUL of #m). */
@@ -456,8 +433,8 @@ static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_
 			if (!d)
 				return reply_error(c, r, "%d $help: no operation %s",
 						   CONSOLE_E_EXTRA, argv[1]);
-			rb_printf(r, "ok %u ", d->opcode);
-			rb_signature(r, d);
+			/* The IDL's own signature, structs whole. */
+			rb_printf(r, "ok %u boolean %s(%s)", d->opcode, d->name, d->idl);
 #ifndef VS_NO_HELP_TEXT
 			if (d->help[0])
 				rb_printf(r, ": %s", d->help);

@@ -767,6 +767,91 @@ static void test_help(void **state)
 	EXPECT("$help a b", "error 2 $help takes 0 or 1 argument, got 2");
 }
 
+/* Collapses whitespace to single spaces and drops it beside '(' and ')' and
+ * before ',': "boolean f ( in double a ,out short b )" becomes
+ * "boolean f(in double a, out short b)". */
+static void idl_normalise(const char *s, size_t n, char *o, size_t cap)
+{
+	size_t k = 0;
+	bool space = false;
+
+	for (size_t i = 0; i < n; i++) {
+		char ch = s[i];
+
+		if (ch == ' ' || ch == '\t' || ch == '\n' || ch == '\r') {
+			space = k > 0;
+			continue;
+		}
+		if (space && ch != '(' && ch != ')' && ch != ',' && o[k - 1] != '(') {
+			assert_true(k + 1 < cap);
+			o[k++] = ' ';
+		}
+		space = ch == ',';
+		assert_true(k + 1 < cap);
+		o[k++] = ch;
+	}
+	o[k] = '\0';
+}
+
+/* $help NAME answers every operation's signature exactly as the IDL
+ * (tools/corba/VehicleService.idl, the specification's appendix, which the
+ * CORBA tests compare with it) declares it, read from the file here: its
+ * operations in the table's order, none missing, none extra. */
+static void test_help_matches_idl(void **state)
+{
+	static char idl[16384];
+	char sig[256], want[CONSOLE_REPLY_MAX], line[64];
+	FILE *f = fopen("tools/corba/VehicleService.idl", "r");
+	const char *p, *end;
+	unsigned ops = 0;
+
+	(void)state;
+	assert_non_null(f);
+	size_t n = fread(idl, 1, sizeof(idl) - 1, f);
+	fclose(f);
+	assert_true(n > 0 && n < sizeof(idl) - 1);
+	idl[n] = '\0';
+	p = strstr(idl, "interface VehicleService");
+	assert_non_null(p);
+	p = strchr(p, '{');
+	assert_non_null(p);
+	end = strstr(p, "};");
+	assert_non_null(end);
+	for (p++; p < end;) {
+		const char *semi = memchr(p, ';', (size_t)(end - p));
+		const char *paren;
+
+		idl_normalise(p, semi ? (size_t)(semi - p) : (size_t)(end - p), sig, sizeof(sig));
+		if (!semi) {
+			/* only blanks after the last declaration */
+			assert_string_equal(sig, "");
+			break;
+		}
+		p = semi + 1;
+		if (strncmp(sig, "const ", 6) == 0)
+			continue;
+		/* every other declaration of the interface is an operation */
+		assert_memory_equal(sig, "boolean ", 8);
+		paren = strchr(sig, '(');
+		assert_non_null(paren);
+		assert_true(ops < CMD_COUNT);
+		const cmd_def_t *d = &cmd_table[ops++];
+		assert_int_equal((size_t)(paren - sig - 8), strlen(d->name));
+		assert_memory_equal(sig + 8, d->name, strlen(d->name));
+		snprintf(want, sizeof(want), "ok %u %s: %s", d->opcode, sig, d->help);
+		snprintf(line, sizeof(line), "$help %s", d->name);
+		EXPECT(line, want);
+	}
+	assert_int_equal(ops, CMD_COUNT);
+	/* the normalising rule itself */
+	{
+		static const char raw[] = "boolean  f ( in double a ,out\n short b ) ";
+
+		idl_normalise(raw, sizeof(raw) - 1, sig, sizeof(sig));
+	}
+	assert_string_equal(sig, "boolean f(in double a, out short b)");
+}
+
 static void test_version_and_diag(void **state)
 {
 	(void)state;
@@ -912,6 +997,7 @@ int main(void)
 	    cmocka_unit_test_setup(test_alarm_sequence, setup),
 	    cmocka_unit_test_setup(test_longest_reply_bounded, setup),
 	    cmocka_unit_test_setup(test_help, setup),
+	    cmocka_unit_test_setup(test_help_matches_idl, setup),
 	    cmocka_unit_test_setup(test_version_and_diag, setup),
 	    cmocka_unit_test_setup(test_config, setup),
 	    cmocka_unit_test_setup(test_extra_handler, setup),

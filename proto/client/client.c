@@ -8,7 +8,7 @@
  * commands.def without one fails to compile here. */
 typedef void (*vc_any_fn)(void);
 static const vc_any_fn vc_fns[] __attribute__((unused)) = {
-#define VS_CMD(name, op, it, in, ot, on, help) (vc_any_fn) vc_##name,
+#define VS_CMD(name, op, it, in, ot, on, idl, help) (vc_any_fn) vc_##name,
 #include "../commands.def"
 #undef VS_CMD
 };

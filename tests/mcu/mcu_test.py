@@ -307,6 +307,8 @@ def c_boot_and_queries(b):
     # the board leaves $config and the help lines out for flash
     expect(b, "$config tick_hz", "error 8 $config is not in this build")
     expect(b, "$help moveForward", "ok 17 boolean moveForward(in double x_)")
+    expect(b, "$help moveCircularRel",
+           "ok 14 boolean moveCircularRel(in Point centerPoint, in double theta)")
     # the jerk it runs with, read and set ($jerk), and its limits (none)
     expect(b, "$jerk", "ok jerk 0.000 0.000 limit 0.000 0.000")
     expect(b, "$jerk 2000 1000", "ok jerk 2000.000 1000.000 limit 0.000 0.000")
