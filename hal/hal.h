@@ -87,4 +87,23 @@ typedef struct {
 	void *ctx;
 } vs_hal_t;
 
+/* A small non-volatile store with the rules of a microcontroller's flash
+ * (firmware/cfgstore.h keeps the saved configuration in it): pages of
+ * page_size bytes are the unit of erase; after an erase every byte reads
+ * erased_byte; a program writes whole words (word bytes, aligned) that are
+ * erased, once each; a power cut may leave the page or word under way half
+ * done. On Linux a file replaced whole at each step (written new, synced,
+ * renamed over); on a board its flash pages, or a RAM region a reset keeps. */
+typedef struct hal_store {
+	uint32_t page_size; /* a multiple of word */
+	uint32_t pages;
+	uint32_t word; /* 4 or 8 */
+	uint8_t erased_byte;
+	/* false: the part reported an error (nothing is assumed done). */
+	bool (*read)(void *ctx, uint32_t off, void *buf, uint32_t n);
+	bool (*erase)(void *ctx, uint32_t page);
+	bool (*program)(void *ctx, uint32_t off, const void *buf, uint32_t n);
+	void *ctx;
+} hal_store_t;
+
 #endif
