@@ -406,7 +406,11 @@ void vm_apply(vm_t *m, const vm_call_t *c, bool reply)
 		(void)a;
 	} else if (op_is(c, "moveContinuousRel")) {
 		m->jog = false;
-		m->cont = VM_WORK_SURE;
+		/* A goal where the unit stands (a whole turn included) may be
+		 * done in the tick it is taken, paused or not. */
+		bool here =
+		    fabs(a[0]) < 1e-6 && fabs(a[1]) < 1e-6 && fabs(remainder(a[2], 360.0)) < 1e-6;
+		m->cont = here ? VM_WORK_MAYBE : VM_WORK_SURE;
 		m->ran_ms = 0;
 	} else if (op_is(c, "moveJog")) {
 		m->cont = VM_WORK_NONE;
