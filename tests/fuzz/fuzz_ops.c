@@ -256,8 +256,14 @@ static void check_tick(void)
 	 * of the line, steps of up to 2e-4 of the limit: the spec's 1 %. */
 	double ar_lim = omni ? ar * 1.01 : ar + 16;
 	if (prev_servo && v->servo &&
-	    (trans_over || fabs((double)(t->w_pt - prev_cmd.w_pt)) > ar_lim))
+	    (trans_over || fabs((double)(t->w_pt - prev_cmd.w_pt)) > ar_lim)) {
+		fprintf(stderr,
+			"fuzz_ops: tick %u, mode %d: acceleration over the limit (translation %s, "
+			"rotation change %.0f raw against %.0f)\n",
+			v->ticks, v->motion.mode, trans_over ? "over" : "within",
+			fabs((double)(t->w_pt - prev_cmd.w_pt)), ar_lim);
 		abort(); /* acceleration limit */
+	}
 	check_jerk(v, t);
 	prev_world[0] = wx;
 	prev_world[1] = wy;
