@@ -7,9 +7,12 @@
 static q32_t corner_vrot(const motion_t *m, const motion_cmd_t *c)
 {
 	q32_t vr = fx_mul(m->v_r_pt, c->corner.k_mm_deg);
-	/* 1 % margin: the step into the corner may carry one tick of a
-	 * (fx_udiv64_small: vr / 100 without a library call) */
-	vr -= vr >= 0 ? (q32_t)fx_udiv64_small((uint64_t)vr, 100) : vr / 100;
+	/* The step into the corner may carry one tick of the line's
+	 * acceleration above the speed planned: the margin is that, or 1 %
+	 * (fx_udiv64_small: vr / 100 without a library call), never more than
+	 * half (a corner too tight for it is not fitted, motion_plan_corner). */
+	q32_t pc = vr >= 0 ? (q32_t)fx_udiv64_small((uint64_t)vr, 100) : vr / 100;
+	vr -= fx_min64(fx_max64(pc, m->a_t_pt2), vr / 2);
 	return fx_min64(vr, c->corner.vacc_pt);
 }
 
@@ -228,6 +231,11 @@ bool motion_plan_corner(motion_t *m, uint8_t i)
 		t = fx_min64(t, rem - m->v - m->v_t_pt);
 	traj_corner_t corner;
 	if (t <= TINY_MM || !traj_corner_plan(&corner, phi, t, m->a_r_pt2))
+		return false;
+	/* Too tight to enter at speed: its rotation's speed cap within two
+	 * ticks of the line's braking (the step in may carry one). The unit
+	 * stops on the waypoint and turns there. */
+	if (fx_mul(m->v_r_pt, corner.k_mm_deg) <= 2 * m->a_t_pt2)
 		return false;
 	c->corner = corner;
 	c->has_corner = true;
