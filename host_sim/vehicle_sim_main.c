@@ -11,6 +11,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <getopt.h>
+#include <limits.h>
 #include <poll.h>
 #include <signal.h>
 #include <stdio.h>
@@ -26,6 +27,7 @@
 #include "../hal/posix/tty.h"
 #include "../proto/server.h"
 #include "sim.h"
+#include "sim_paths.h"
 
 #define INBUF 4096
 
@@ -294,11 +296,16 @@ static void close_can(app_t *a)
 	sockcan_close(&a->can);
 }
 
+/* Where vehicle.xml and io.xml come from without --config and --io. */
+static char search_dirs[SIM_PATHS_N][SIM_PATHS_MAX];
+static size_t search_n;
+
 static void usage(FILE *f)
 {
 	fputs("usage: vehicle-sim [options]\n"
-	      "  --config FILE   vehicle description (default config/vehicle.xml)\n"
-	      "  --io FILE       io.xml (default config/io.xml)\n"
+	      "  --config FILE   vehicle description (default: vehicle.xml from the first of\n"
+	      "                  the folders below that has one)\n"
+	      "  --io FILE       io.xml (default: io.xml, found the same way)\n"
 	      "  --realtime      tick at the configured rate in wall time ($wait refused)\n"
 	      "  --fast          lockstep: time advances only in '$wait MS'; exit at EOF\n"
 	      "                  (default: --realtime on a terminal, else --fast)\n"
@@ -321,13 +328,24 @@ static void usage(FILE *f)
 	      "  --baud N        line speed set on the pty (default 115200; nominal on a pty)\n"
 	      "  --help          this text\n"
 	      "Console on stdin/stdout (spec section 7); simulator extras: $wait MS, $sim ...\n"
-	      "(see host_sim/sim.h).\n",
+	      "(see host_sim/sim.h).\n"
+	      "Configuration folders, in order:\n",
 	      f);
+	for (size_t i = 0; i < search_n; i++)
+		fprintf(f, "  %s\n", search_dirs[i]);
+}
+
+/* The program's own path, so that its configuration is found from any
+ * working folder; NULL when the system cannot say. */
+static const char *exe_path(char buf[PATH_MAX])
+{
+	return realpath("/proc/self/exe", buf);
 }
 
 int main(int argc, char **argv)
 {
-	const char *config_path = "config/vehicle.xml", *io_path = "config/io.xml";
+	const char *config_path = NULL, *io_path = NULL;
+	char exe[PATH_MAX], config_buf[PATH_MAX], io_buf[PATH_MAX];
 	const char *trace_path = NULL;
 	unsigned long trace_every = 1;
 	int realtime = -1;
@@ -370,6 +388,7 @@ int main(int argc, char **argv)
 	    {NULL, 0, NULL, 0},
 	};
 	int o;
+	search_n = sim_paths_dirs(exe_path(exe), search_dirs);
 	while ((o = getopt_long(argc, argv, "", opts, NULL)) != -1) {
 		switch (o) {
 		case O_CONFIG:
@@ -450,6 +469,21 @@ int main(int argc, char **argv)
 
 	vs_config_t cfg;
 	char err[512];
+	if (!config_path) {
+		if (sim_paths_find(search_dirs, search_n, "vehicle.xml", config_buf,
+				   sizeof(config_buf)) < 0) {
+			fprintf(stderr, "vehicle-sim: %s (--config FILE names one)\n", config_buf);
+			return 1;
+		}
+		config_path = config_buf;
+	}
+	if (!io_path) {
+		if (sim_paths_find(search_dirs, search_n, "io.xml", io_buf, sizeof(io_buf)) < 0) {
+			fprintf(stderr, "vehicle-sim: %s (--io FILE names one)\n", io_buf);
+			return 1;
+		}
+		io_path = io_buf;
+	}
 	if (config_load(config_path, io_path, &cfg, NULL, err, sizeof(err)) < 0) {
 		fprintf(stderr, "vehicle-sim: %s\n", err);
 		return 1;

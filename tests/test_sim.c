@@ -311,7 +311,7 @@ static void omni_config_on_ideal_plant(void **state)
 	snprintf(cmd, sizeof(cmd),
 		 "printf '$watchdog 0\\nsetPower true\\nsetServo true\\nmoveLinearRel 300 -200 "
 		 "0\\n$wait 3000\\nmoveTurn 90\\n$wait 3000\\ngetPosition\\n' | %s/vehicle-sim "
-		 "--fast --ideal --config config/vehicle-omni.xml 2>&1",
+		 "--fast --ideal --config config/vehicle-omni.xml --io config/io.xml 2>&1",
 		 BUILD_DIR);
 	FILE *f = popen(cmd, "r");
 	assert_non_null(f);

@@ -28,7 +28,12 @@
 #include "../../proto/server.h"
 #include "../posix/socketcan.h"
 
-#define DEFAULT_CONFIG	"/etc/vehicle/vehicle.xml"
+/* SYSCONFDIR of make install, fixed at build time (mk/linux.mk); make's
+ * default here for tools that read the file alone. */
+#ifndef VEHICLE_SYSCONFDIR
+#define VEHICLE_SYSCONFDIR "/etc"
+#endif
+#define DEFAULT_CONFIG	VEHICLE_SYSCONFDIR "/vehicle/vehicle.xml"
 #define DEFAULT_RT_PRIO 80
 /* Longest deceleration the shutdown waits for before cutting power. */
 #define SHUTDOWN_BOUND_MS 10000u

@@ -16,7 +16,10 @@ wait_rx() {
 start_sim() { # start_sim [vehicle-sim options...]
 	local before
 	before=$(cat /proc/net/can/rcvlist_* | grep -cE '^ +vcan0 ')
-	vehicle-sim --can vcan0 "$@" </dev/null >/tmp/sim.out 2>/tmp/sim.err &
+	# The guest's configuration unless the caller names its own (the last
+	# --config wins).
+	vehicle-sim --can vcan0 --config /test/config/vehicle.xml --io /test/config/io.xml "$@" \
+		</dev/null >/tmp/sim.out 2>/tmp/sim.err &
 	SIM=$!
 	wait_rx $((before + 1))
 }
