@@ -1,4 +1,4 @@
-/* CSV trace writer (columns: trace.h). */
+/* CSV trace writer (columns: trace.h, docs/trace.md). */
 #include "trace.h"
 
 #include <string.h>
@@ -7,7 +7,7 @@ static const char header[] =
     "time_s,cmd_x_mm,cmd_y_mm,cmd_th_deg,odo_x_mm,odo_y_mm,odo_th_deg,"
     "true_x_mm,true_y_mm,true_th_deg,cmd_vx_mm_s,cmd_vy_mm_s,cmd_w_deg_s,"
     "sp0_cps,sp1_cps,sp2_cps,sp3_cps,meas0_cps,meas1_cps,meas2_cps,meas3_cps,"
-    "state,queue_len\n";
+    "state,queue_len,alarms,newest_alarm\n";
 
 static double q32(q32_t v)
 {
@@ -54,7 +54,14 @@ void trace_tick(trace_t *t, double time_s, vehicle_t *v, const plant_t *pl)
 		fprintf(t->f, ",%.2f", a < pl->n ? (double)d.wheel_cps_q8[a] / 256.0 : 0.0);
 	for (int a = 0; a < VS_MAX_AXES; a++)
 		fprintf(t->f, ",%.2f", a < pl->n ? pl->w[a].vel_cps : 0.0);
-	fprintf(t->f, ",%d,%u\n", state, (unsigned)d.queue_len);
+	/* The alarm list as getActiveAlarm gives it, as vehiclectl record
+	 * writes it: a plot marks each alarm raised. */
+	int16_t alarms = 0;
+	vs_alarm_t newest;
+	uint16_t got = 0;
+	vs_getActiveAlarm(v, 1, &alarms, &newest, &got);
+	fprintf(t->f, ",%d,%u,%d,%lu\n", state, (unsigned)d.queue_len, alarms,
+		got ? (unsigned long)newest.code : 0ul);
 	/* A reader that follows the file while the simulator runs (a test
 	 * waiting for a stop without asking the unit) sees each change. */
 	if (state != t->last_state)

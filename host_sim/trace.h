@@ -1,6 +1,7 @@
 /* CSV trace of a simulation, one row per control tick (or every Nth).
  *
- * Columns (header row written first, exactly these names):
+ * Columns (header row written first, exactly these names; for users in
+ * docs/trace.md, which tests/python/test_plot.py holds to the header):
  *   time_s                          simulated time at the end of the tick
  *   cmd_x_mm,cmd_y_mm,cmd_th_deg    commanded (reference) pose
  *   odo_x_mm,odo_y_mm,odo_th_deg    measured pose (odometry)
@@ -10,6 +11,8 @@
  *   meas0_cps..meas3_cps            true wheel speeds, counts/s
  *   state                           getState code (decimal, e.g. 17 = Busy)
  *   queue_len                       queued motion commands
+ *   alarms                          active alarms (getActiveAlarm's count)
+ *   newest_alarm                    code of the newest active alarm, 0: none
  * Axes a base does not have read 0.
  */
 #ifndef TRACE_H

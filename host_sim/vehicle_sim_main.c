@@ -309,7 +309,7 @@ static void usage(FILE *f)
 	      "  --realtime      tick at the configured rate in wall time ($wait refused)\n"
 	      "  --fast          lockstep: time advances only in '$wait MS'; exit at EOF\n"
 	      "                  (default: --realtime on a terminal, else --fast)\n"
-	      "  --trace FILE    CSV trace, one row per tick (columns: host_sim/trace.h)\n"
+	      "  --trace FILE    CSV trace, one row per tick (columns: docs/trace.md)\n"
 	      "  --trace-every N one trace row every N ticks\n"
 	      "  --ideal         ideal plant: no motor lag, no acceleration/current limit, and\n"
 	      "                  the finest power-of-two encoder resolution up to 2^20 counts\n"
