@@ -1,15 +1,19 @@
 #!/bin/bash
 # VehicleService over CORBA, end to end (make check; docs/corba.md):
 #   1. the committed IDL equals the specification's appendix, both blocks joined
-#   2. omniNames on a loopback port with its own data folder
+#   2. omniNames on a loopback port with its own data folder, started by
+#      tools/corba/names.sh (the README's line) in a folder not yet there
 #   3. vehicle-sim --pty --fast (lockstep), vehicle-corba on its pty, registered
 #      under a configurable name, printing its IOR
 #   4. vs-corba-client (stubs by omniidl from the same IDL) through the naming
 #      service: all 34 operations and moves, exact results; through the IOR
 #   5. a unit that does not answer (simulator stopped): TRANSIENT, bounded;
 #      the gateway serves again when it answers
-#   6. the gateway ends on SIGTERM and leaves the naming service clean
-#   7. the 34 operations again with the gateway on the unit's text console
+#   6. the gateway ends on SIGTERM and leaves the naming service clean; the
+#      naming service ended and started again by the same line, on the data
+#      file its first run left
+#   7. the 34 operations again with the gateway on the unit's text console,
+#      registered with that second naming service
 # Every wait is bounded and polls for its condition; none is a fixed sleep.
 # Usage: tests/corba/run.sh BUILD
 set -u
@@ -77,31 +81,38 @@ else
 	echo "note: $spec_src not found (VEHICLE_SPEC_DIR); IDL not compared"
 fi
 
-# 2. omniNames on 127.0.0.1 only, its own data folder; a free port found by
-# trying (other builds may run beside this one).
-mkdir -p "$tmp/names"
+# 2. omniNames on 127.0.0.1 only, its own data folder (made by the script:
+# not there yet); a free port found by trying (other builds may run beside
+# this one).
+names_dir=$tmp/names/data
+# start_names PORT: tools/corba/names.sh in the background (its pid in ns;
+# not holding the simulator's fifos, whose end the simulator waits for);
+# true once it serves, false when it ended.
+start_names() {
+	rm -f "$tmp/names.log"
+	"$here/tools/corba/names.sh" "$1" "$names_dir" -errlog "$tmp/names.log" \
+		-ORBendPoint "giop:tcp:127.0.0.1:$1" >/dev/null 2>&1 7>&- 8<&- &
+	ns=$!
+	wait_for 30 sh -c "grep -q 'Root context is' '$tmp/names.log' 2>/dev/null || ! kill -0 $ns 2>/dev/null" &&
+		kill -0 "$ns" 2>/dev/null && grep -q 'Root context is' "$tmp/names.log"
+}
 ns_port=
 for try in 1 2 3 4 5 6 7 8 9 10; do
 	port=$((20000 + (RANDOM * 7 + $$ + try * 997) % 30000))
-	rm -f "$tmp/names/"*
-	omniNames -start "$port" -always -datadir "$tmp/names" -errlog "$tmp/names.log" \
-		-ORBendPoint "giop:tcp:127.0.0.1:$port" >/dev/null 2>&1 &
-	ns=$!
-	if wait_for 30 sh -c "grep -q 'Root context is' '$tmp/names.log' 2>/dev/null || ! kill -0 $ns 2>/dev/null" &&
-		kill -0 "$ns" 2>/dev/null && grep -q 'Root context is' "$tmp/names.log"; then
+	if start_names "$port"; then
 		ns_port=$port
 		pids+=("$ns")
 		break
 	fi
 	kill "$ns" 2>/dev/null
 	wait "$ns" 2>/dev/null
-	rm -f "$tmp/names.log"
+	rm -rf "$tmp/names"
 done
 if [ -z "$ns_port" ]; then
 	fail "omniNames did not start on a loopback port"
 	finish
 fi
-ok "omniNames on 127.0.0.1:$ns_port, data in its own folder"
+ok "omniNames on 127.0.0.1:$ns_port by tools/corba/names.sh, data in a folder it made"
 
 # 3. The simulator in lockstep on a pty; its stdin/stdout on fds 7/8 for the
 # client ('$wait', '$sim', direct console).
@@ -171,6 +182,24 @@ else
 	fail "vehicle-corba still running 60 s after SIGTERM"
 fi
 run_client --unbound --name "$name"
+
+# The naming service's second run: the same line, the data file of the
+# first run there (where "omniNames -start" alone refuses).
+kill -TERM "$ns"
+wait "$ns" 2>/dev/null
+if ls "$names_dir"/omninames-*.dat >/dev/null 2>&1; then
+	ok "the first run left its data file in $names_dir"
+else
+	fail "no data file in $names_dir after the first run"
+fi
+if start_names "$ns_port"; then
+	pids+=("$ns")
+	ok "tools/corba/names.sh started omniNames again on its data file"
+else
+	fail "tools/corba/names.sh did not start omniNames a second time"
+	cat "$tmp/names.log"
+	finish
+fi
 
 # 7. The same 34 operations with the gateway on the unit's text console
 # (a fresh simulator; doubles come back with the console's three decimals).
