@@ -18,6 +18,7 @@
 #include <cmocka.h>
 
 #include "../firmware/cfgstore.h"
+#include "../firmware/config_save.h"
 
 #define MEM_MAX 2048
 
@@ -306,6 +307,115 @@ static void test_crc32(void **state)
 	assert_int_equal(cfgstore_crc32(cfgstore_crc32(0, "1234", 4), "56789", 5), 0xCBF43926u);
 }
 
+/* The table's fields only (the io list is not saved). */
+static void assert_fields_equal(const vs_config_t *a, const vs_config_t *b)
+{
+	for (unsigned i = 0; i < VS_CONFIG_NFIELDS; i++) {
+		const vs_config_field_t *f = &vs_config_fields[i];
+		for (unsigned k = 0; k < f->n; k++)
+			if (vs_config_get(a, f, k) != vs_config_get(b, f, k))
+				fail_msg("%s[%u]: %g, want %g", f->name, k, vs_config_get(a, f, k),
+					 vs_config_get(b, f, k));
+	}
+}
+
+/* What differs from the base, by name, and back: exactly. */
+static void test_config_round_trip(void **state)
+{
+	(void)state;
+	vs_config_t base, cur, out;
+	uint8_t buf[1024];
+	vs_config_defaults(&base);
+	cur = base;
+	assert_int_equal(vs_config_encode(&cur, &base, buf, sizeof buf), 4);
+	assert_int_equal(buf[0], 1);
+	assert_int_equal(buf[1], 'D');
+	assert_int_equal(buf[2] | buf[3] << 8, 0);
+	cur.wheel_diameter_mm = 160.125;
+	cur.drive_lag_ms[2] = 35.5;
+	cur.tick_hz = 500;
+	cur.kinematics = VS_KIN_OMNI;
+	size_t n = vs_config_encode(&cur, &base, buf, sizeof buf);
+	/* 4 + (1 + 17 + 3 + 8) + (1 + 12 + 3 + 8) + (1 + 7 + 3 + 4) + (1 + 10 + 3 + 4) */
+	assert_int_equal(n, 4 + 29 + 24 + 15 + 18);
+	assert_int_equal(buf[2], 4);
+	out = base;
+	vs_config_decode_t info;
+	assert_int_equal(vs_config_decode(&out, buf, n, &info), VS_CFGSAVE_OK);
+	assert_int_equal(info.applied, 4);
+	assert_int_equal(info.dropped, 0);
+	assert_fields_equal(&out, &cur);
+	/* Too small a buffer: nothing. */
+	assert_int_equal(vs_config_encode(&cur, &base, buf, n - 1), 0);
+}
+
+/* A store written by another table: a field it no longer has, one whose
+ * type changed, an element past the array, a boolean that is not 0 or 1
+ * are dropped; the rest is taken. */
+static void test_config_other_table(void **state)
+{
+	(void)state;
+	vs_config_t base, out;
+	vs_config_defaults(&base);
+	uint8_t buf[256];
+	size_t pos = 4;
+	const struct {
+		const char *name;
+		uint8_t k, type, size;
+		uint8_t v[8];
+	} e[] = {
+	    {"old_field", 0, VS_CFG_U32, 4, {1, 0, 0, 0}},
+	    {"tick_hz", 0, VS_CFG_U16, 2, {0xF4, 0x01}},	       /* was U32 */
+	    {"drive_lag_ms", 9, VS_CFG_DOUBLE, 8, {0}},		       /* past the array */
+	    {"link_timeout_ms", 0, VS_CFG_U32, 4, {0xD0, 0x07, 0, 0}}, /* 2000 */
+	};
+	for (unsigned i = 0; i < sizeof e / sizeof e[0]; i++) {
+		size_t nl = strlen(e[i].name);
+		buf[pos++] = (uint8_t)nl;
+		memcpy(buf + pos, e[i].name, nl);
+		pos += nl;
+		buf[pos++] = e[i].k;
+		buf[pos++] = e[i].type;
+		buf[pos++] = e[i].size;
+		memcpy(buf + pos, e[i].v, e[i].size);
+		pos += e[i].size;
+	}
+	buf[0] = 1;
+	buf[1] = 'D';
+	buf[2] = 4;
+	buf[3] = 0;
+	out = base;
+	vs_config_decode_t info;
+	assert_int_equal(vs_config_decode(&out, buf, pos, &info), VS_CFGSAVE_OK);
+	assert_int_equal(info.applied, 1);
+	assert_int_equal(info.dropped, 3);
+	assert_int_equal(out.link_timeout_ms, 2000);
+	assert_int_equal(out.tick_hz, base.tick_hz);
+	/* Cut short anywhere: malformed, nothing applied. */
+	for (size_t n = 0; n < pos; n++) {
+		out = base;
+		assert_int_equal(vs_config_decode(&out, buf, n, &info), VS_CFGSAVE_MALFORMED);
+		assert_int_equal(out.link_timeout_ms, base.link_timeout_ms);
+	}
+	/* Bytes past the last entry: malformed too. */
+	assert_int_equal(vs_config_decode(&out, buf, pos + 1, &info), VS_CFGSAVE_MALFORMED);
+	/* Another platform's numbers, another version: foreign. */
+	buf[1] = 'Q';
+	assert_int_equal(vs_config_decode(&out, buf, pos, &info), VS_CFGSAVE_FOREIGN);
+	buf[1] = 'D';
+	buf[0] = 2;
+	assert_int_equal(vs_config_decode(&out, buf, pos, &info), VS_CFGSAVE_FOREIGN);
+}
+
+/* The schema names this table: it changes when a row's name, type or
+ * length does (a new firmware then says it read an older store). Update
+ * the constant with the table. */
+static void test_config_schema(void **state)
+{
+	(void)state;
+	assert_int_equal(vs_config_schema(), 0x916B11C3u);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -314,6 +424,9 @@ int main(void)
 	    cmocka_unit_test(test_every_cut_8byte_words_two_pages_a_slot),
 	    cmocka_unit_test(test_clear_cut),
 	    cmocka_unit_test(test_damage),
+	    cmocka_unit_test(test_config_round_trip),
+	    cmocka_unit_test(test_config_other_table),
+	    cmocka_unit_test(test_config_schema),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "../../firmware/cfgstore.h"
+#include "../../firmware/config_save.h"
 
 #define MEM 1024
 
@@ -69,6 +70,17 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 		uint32_t want = (uint32_t)h[16] | (uint32_t)h[17] << 8 | (uint32_t)h[18] << 16 |
 				(uint32_t)h[19] << 24;
 		if (crc != want)
+			abort();
+		/* The payload's reader: a verdict; a well-formed one changes
+		 * only the table's fields. */
+		static vs_config_t base, out;
+		vs_config_defaults(&base);
+		out = base;
+		vs_config_decode_t di;
+		vs_config_decode_status_t ds = vs_config_decode(&out, buf, info.len, &di);
+		if (ds != VS_CFGSAVE_OK && memcmp(&out, &base, sizeof out) != 0)
+			abort(); /* a rejected payload changed the configuration */
+		if (memcmp(out.io, base.io, sizeof out.io) != 0)
 			abort();
 	} else if (st != CFGSTORE_EMPTY && st != CFGSTORE_CORRUPT) {
 		abort();
