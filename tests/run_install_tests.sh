@@ -117,7 +117,7 @@ got=$(cd "$tmp/elsewhere" && PYTHONPATH=$dest/${py%/vehicleservice} PYTHONDONTWR
 	PYTHONPATH=$dest/${py%/vehicleservice} PYTHONDONTWRITEBYTECODE=1 \
 		"$dest/usr/local/bin/vehicle-plot" --help 2>&1 | head -n 1)
 same "installed vehicle-plot runs on the installed package" "$dest/$py/plot.py
-usage: vehicle-plot [-h] -o OUTPUT [--config CONFIG] [--velocity MM_S DEG_S]" "$got"
+usage: vehicle-plot [-h] [-o OUTPUT] [--describe] [--config CONFIG]" "$got"
 
 echo '<!-- edited on the vehicle -->' >>"$dest/etc/vehicle/vehicle.xml"
 echo '<!-- stale -->' >>"$dest/usr/local/share/vehicle/vehicle.xml"
