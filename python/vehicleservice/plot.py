@@ -393,7 +393,7 @@ def plot(trace, outputs, cfg, title=None, out=sys.stdout, waypoints=None, descri
     fig = plt.figure(figsize=(12, 15))
     fig.suptitle(title or trace)
     panels, twins = draw(fig, a, cfg)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0, 1, 0.985))
     for o in outputs:
         meta = {"Date": None} if o.lower().endswith(".svg") else {}
         fig.savefig(o, dpi=80, metadata=meta)
