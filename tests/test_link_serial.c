@@ -411,6 +411,85 @@ static void test_console_client(void **state)
 	assert_int_equal(S.srv.serial.fs.st.executed, 0);
 }
 
+/* vc_wait_done after a refused request left a warning: the unit reads
+ * Warning-111 while idle, which is done (spec 6.9); a move's wait returns
+ * when the move has ended, a fault's with VC_E_STOPPED, a wait too short
+ * with VC_E_NOT_DONE. */
+static void wait_session(bool console)
+{
+	bool r = true;
+	int16_t st = 0;
+	char msg[VS_STATE_MSG_MAX];
+	vs_position_t pos;
+	char reply[CONSOLE_REPLY_MAX];
+
+	host_drain();
+	assert_int_equal(console ? vc_attach_console_fd(&C, SLAVE, false)
+				 : vc_attach_serial_fd(&C, SLAVE, false),
+			 VC_OK);
+	assert_int_equal(vc_setPower(&C, &r, true), VC_OK);
+	assert_int_equal(vc_setServo(&C, &r, true), VC_OK);
+	assert_int_equal(vc_setVelocity(&C, &r, (vs_velocity_t){0.0, 10.0}), VC_OK);
+	assert_false(r);
+	assert_int_equal(vc_wait_done(&C, 0, &st, msg), VC_OK);
+	assert_int_equal(st, VS_STATE_WARNING);
+	assert_string_equal(msg, "Warning-111");
+
+	assert_int_equal(vc_moveForward(&C, &r, 300.0), VC_OK);
+	assert_true(r);
+	assert_int_equal(vc_getState(&C, &r, &st, msg), VC_OK);
+	assert_int_equal(st, VS_STATE_BUSY);
+	assert_int_equal(vc_wait_done(&C, 60000, &st, msg), VC_OK);
+	assert_int_equal(st, VS_STATE_WARNING);
+	assert_string_equal(msg, "Warning-111");
+	/* done means in position: every wheel within the 0.05 mm window */
+	assert_int_equal(vc_getPosition(&C, &r, &pos), VC_OK);
+	assert_true(fabs(pos.x - 300.0) <= 0.05);
+
+	/* a fault while the move runs */
+	assert_int_equal(vc_moveForward(&C, &r, 5000.0), VC_OK);
+	assert_true(r);
+	pthread_mutex_lock(&MU);
+	assert_true(sim_exec(&S, "$sim drive 0 fault 0x2310", reply, sizeof(reply)));
+	pthread_mutex_unlock(&MU);
+	assert_int_equal(vc_wait_done(&C, 60000, &st, msg), VC_E_STOPPED);
+	assert_int_equal(st, VS_STATE_ALARM);
+	assert_string_equal(msg, "Alarm-201");
+	assert_int_equal(vc_getPosition(&C, &r, &pos), VC_OK);
+	/* stopped where the fault found it, far short of 5,300 mm */
+	assert_true(pos.x > 300.0 - 0.05 && pos.x < 400.0);
+
+	/* not done within the wait: Busy at its end; then a stop is done */
+	pthread_mutex_lock(&MU);
+	assert_true(sim_exec(&S, "$sim drive 0 ok", reply, sizeof(reply)));
+	pthread_mutex_unlock(&MU);
+	assert_int_equal(vc_clearAlarm(&C, &r), VC_OK);
+	assert_int_equal(vc_setServo(&C, &r, true), VC_OK);
+	assert_true(r);
+	assert_int_equal(vc_moveForward(&C, &r, 5000.0), VC_OK);
+	assert_true(r);
+	assert_int_equal(vc_wait_done(&C, 50, &st, msg), VC_E_NOT_DONE);
+	assert_int_equal(st, VS_STATE_BUSY);
+	assert_string_equal(msg, "Busy");
+	assert_int_equal(vc_stop(&C, &r), VC_OK);
+	assert_int_equal(vc_wait_done(&C, 60000, &st, msg), VC_OK);
+	assert_int_equal(st, VS_STATE_READY);
+	assert_string_equal(msg, "Ready");
+	vc_close(&C);
+}
+
+static void test_wait_done_frames(void **state)
+{
+	(void)state;
+	wait_session(false);
+}
+
+static void test_wait_done_console(void **state)
+{
+	(void)state;
+	wait_session(true);
+}
+
 /* The same frame twice: answered twice, run once. */
 static void test_retransmission_runs_once(void **state)
 {
@@ -1341,6 +1420,56 @@ static void test_vehiclectl(void **state)
 	stop_sim();
 }
 
+/* vehiclectl wait and --wait, after a refused request left warning 111:
+ * done when the move has ended (exit 0), stopped short by a fault (exit 1),
+ * not done within --wait-limit (exit 4). */
+static void test_vehiclectl_wait(void **state)
+{
+	static char out[4096];
+	double x = 0, y = 1, th = 1;
+
+	(void)state;
+	start_sim();
+	/* a process per request: pauses as long as a loaded host makes them */
+	sim_line("$watchdog 0\n", "ok watchdog 0\n");
+	assert_int_equal(ctl(out, sizeof(out), "--port %s wait now", PTY_PATH), 2);
+	assert_string_equal(out,
+			    "vehiclectl: wait takes no argument (its limit: --wait-limit S)\n");
+	assert_int_equal(ctl(out, sizeof(out), "--port %s --wait-limit x wait", PTY_PATH), 2);
+	assert_int_equal(ctl(out, sizeof(out), "--port %s wait", PTY_PATH), 1);
+	assert_string_equal(out, "stopped state=25 Msg=\"Unpowered\"\n");
+	assert_int_equal(ctl(out, sizeof(out), "--port %s setPower true", PTY_PATH), 0);
+	assert_int_equal(ctl(out, sizeof(out), "--port %s setServo true", PTY_PATH), 0);
+	assert_int_equal(ctl(out, sizeof(out), "--port %s setVelocity 0 10", PTY_PATH), 1);
+	assert_int_equal(ctl(out, sizeof(out), "--port %s --wait moveForward 300", PTY_PATH), 0);
+	assert_string_equal(out, "true\ndone state=18 Msg=\"Warning-111\"\n");
+	assert_int_equal(ctl(out, sizeof(out), "--port %s getPosition", PTY_PATH), 0);
+	assert_int_equal(sscanf(out, "true x=%lf y=%lf theta=%lf", &x, &y, &th), 3);
+	/* in position: the wheels within the 0.05 mm window */
+	assert_true(fabs(x - 300.0) <= 0.05);
+	assert_true(fabs(y) <= 0.05 && fabs(th) <= 0.01);
+	/* refused: no wait, exit 1 */
+	assert_int_equal(ctl(out, sizeof(out), "--port %s --wait moveForward 1e9", PTY_PATH), 1);
+	assert_string_equal(out, "false\n");
+
+	assert_int_equal(ctl(out, sizeof(out), "--port %s moveForward 5000", PTY_PATH), 0);
+	sim_line("$sim drive 1 fault 0x2310\n", "ok drive 1 fault 0x2310\n");
+	assert_int_equal(ctl(out, sizeof(out), "--port %s --json wait", PTY_PATH), 1);
+	assert_string_equal(
+	    out, "{\"op\":\"wait\",\"outcome\":\"stopped\",\"state\":19,\"Msg\":\"Alarm-201\"}\n");
+
+	sim_line("$sim drive 1 ok\n", "ok drive 1 ok\n");
+	assert_int_equal(ctl(out, sizeof(out), "--port %s clearAlarm", PTY_PATH), 0);
+	assert_int_equal(ctl(out, sizeof(out), "--port %s setServo true", PTY_PATH), 0);
+	assert_int_equal(
+	    ctl(out, sizeof(out), "--port %s --wait-limit 0.1 --wait moveForward 5000", PTY_PATH),
+	    4);
+	assert_string_equal(out, "true\ntimeout state=17 Msg=\"Busy\"\n");
+	assert_int_equal(ctl(out, sizeof(out), "--port %s --wait stop", PTY_PATH), 0);
+	assert_string_equal(out, "true\ndone state=16 Msg=\"Ready\"\n");
+	stop_sim();
+}
+
 /* A failed test leaves no simulator behind. */
 static int sim_teardown(void **state)
 {
@@ -1491,6 +1620,8 @@ int main(int argc, char **argv)
 	    cmocka_unit_test_setup_teardown(test_console_utf8, setup, teardown),
 	    cmocka_unit_test_setup_teardown(test_binary_client, setup, teardown),
 	    cmocka_unit_test_setup_teardown(test_console_client, setup, teardown),
+	    cmocka_unit_test_setup_teardown(test_wait_done_frames, setup, teardown),
+	    cmocka_unit_test_setup_teardown(test_wait_done_console, setup, teardown),
 	    cmocka_unit_test_setup_teardown(test_retransmission_runs_once, setup, teardown),
 	    cmocka_unit_test_setup_teardown(test_bad_input, setup, teardown),
 	    cmocka_unit_test_setup_teardown(test_pipelined_flow_control, setup, teardown),
@@ -1502,6 +1633,7 @@ int main(int argc, char **argv)
 	    cmocka_unit_test_setup_teardown(test_sim_long_comment, fake_setup, sim_teardown),
 	    cmocka_unit_test(test_client_timeout),
 	    cmocka_unit_test(test_vehiclectl),
+	    cmocka_unit_test_teardown(test_vehiclectl_wait, sim_teardown),
 	    cmocka_unit_test_teardown(test_link_watchdog_host_killed, sim_teardown),
 	};
 

@@ -3,10 +3,15 @@
  *   vehiclectl --port /dev/ttyUSB0 moveForward 500
  *   vehiclectl --can can0 getPosition
  *   vehiclectl --port /dev/pts/3 --json watch --count 5
+ *   vehiclectl --port /dev/pts/3 --wait moveForward 500
  *
  * Every operation of the command table is a command; its arguments follow
  * the console's rules (numbers, true/false/on/off/1/0). Exit status: 0 the
  * operation returned true, 1 it returned false, 2 usage, 3 link failure.
+ * 'wait' (and --wait after an operation that returned true) polls getState
+ * until the unit is done (vc_wait_done): 0 done (Ready, or Warning-### while
+ * idle), 1 stopped short (a fault, Locked, Stuck, servo or power off), 4
+ * still busy or paused after --wait-limit.
  */
 #include <errno.h>
 #include <getopt.h>
@@ -43,10 +48,15 @@ static void usage(FILE *f)
 	      "  --json          one JSON object per answer\n"
 	      "  --timeout MS    per attempt (default 500)\n"
 	      "  --retries N     further attempts after a timeout (default 2)\n"
+	      "  --wait          after an operation that returned true, wait as 'wait' does\n"
+	      "  --wait-limit S  longest wait, seconds (default 300)\n"
 	      "commands:\n"
 	      "  OPERATION ARGS  any operation of the command table (see 'help')\n"
 	      "  help [OP]       the operations, or one with its arguments\n"
 	      "  info            protocol version and command table checksum of the unit\n"
+	      "  wait            until the unit is done: Ready, or Warning-### while idle\n"
+	      "                  (exit 0); a fault, Locked, Stuck, servo or power off (exit 1);\n"
+	      "                  still busy or paused after --wait-limit (exit 4)\n"
 	      "  watch [--count N] [--interval MS]\n"
 	      "                  state, pose, speed, battery and alarms until Ctrl-C\n"
 	      "  record FILE --duration S [--interval MS]\n"
@@ -259,6 +269,28 @@ static int cmd_info(vc_client_t *c, bool json)
 	return 0;
 }
 
+/* wait: polls until the unit is done, prints the state it ended in. */
+static int cmd_wait(vc_client_t *c, double limit_s, bool json)
+{
+	int16_t st = 0;
+	char msg[VS_STATE_MSG_MAX] = "";
+	const char *how;
+	int e;
+
+	errno = 0;
+	e = vc_wait_done(c, (unsigned)(limit_s * 1000.0 + 0.5), &st, msg);
+	if (e != VC_OK && e != VC_E_STOPPED && e != VC_E_NOT_DONE)
+		return report_err(c, e);
+	how = e == VC_OK ? "done" : e == VC_E_STOPPED ? "stopped" : "timeout";
+	if (json)
+		printf("{\"op\":\"wait\",\"outcome\":\"%s\",\"state\":%d,\"Msg\":", how, st);
+	else
+		printf("%s state=%d Msg=", how, st);
+	json_str(stdout, msg);
+	printf(json ? "}\n" : "\n");
+	return e == VC_OK ? 0 : e == VC_E_STOPPED ? 1 : 4;
+}
+
 /* One sample of the unit for watch and record. */
 typedef struct {
 	double t;
@@ -433,12 +465,25 @@ int main(int argc, char **argv)
 	const char *port = NULL, *can = NULL;
 	unsigned long baud = VC_DEFAULT_BAUD, node = 1, timeout = VC_DEFAULT_TIMEOUT_MS,
 		      retries = VC_DEFAULT_RETRIES;
-	bool console = false, json = false;
+	bool console = false, json = false, wait = false;
+	double wait_limit = 300.0;
 	vc_client_t *c;
 	const cmd_def_t *d = NULL;
 	int rc, e, o;
 
-	enum { O_PORT = 1, O_BAUD, O_CONSOLE, O_CAN, O_NODE, O_JSON, O_TIMEOUT, O_RETRIES, O_HELP };
+	enum {
+		O_PORT = 1,
+		O_BAUD,
+		O_CONSOLE,
+		O_CAN,
+		O_NODE,
+		O_JSON,
+		O_TIMEOUT,
+		O_RETRIES,
+		O_WAIT,
+		O_WAIT_LIMIT,
+		O_HELP
+	};
 	static const struct option opts[] = {
 	    {"port", required_argument, NULL, O_PORT},
 	    {"baud", required_argument, NULL, O_BAUD},
@@ -448,6 +493,8 @@ int main(int argc, char **argv)
 	    {"json", no_argument, NULL, O_JSON},
 	    {"timeout", required_argument, NULL, O_TIMEOUT},
 	    {"retries", required_argument, NULL, O_RETRIES},
+	    {"wait", no_argument, NULL, O_WAIT},
+	    {"wait-limit", required_argument, NULL, O_WAIT_LIMIT},
 	    {"help", no_argument, NULL, O_HELP},
 	    {NULL, 0, NULL, 0},
 	};
@@ -466,6 +513,16 @@ int main(int argc, char **argv)
 			break;
 		case O_JSON:
 			json = true;
+			break;
+		case O_WAIT:
+			wait = true;
+			break;
+		case O_WAIT_LIMIT:
+			if (np_parse_double(optarg, &wait_limit) != NP_OK || wait_limit < 0 ||
+			    wait_limit > 86400.0) {
+				fprintf(stderr, "vehiclectl: --wait-limit: seconds, 0..86400\n");
+				return 2;
+			}
 			break;
 		case O_BAUD:
 		case O_NODE:
@@ -503,13 +560,17 @@ int main(int argc, char **argv)
 	if (strcmp(argv[0], "help") == 0)
 		return cmd_help(argc, argv);
 	if (strcmp(argv[0], "info") != 0 && strcmp(argv[0], "watch") != 0 &&
-	    strcmp(argv[0], "record") != 0) {
+	    strcmp(argv[0], "record") != 0 && strcmp(argv[0], "wait") != 0) {
 		d = cmd_by_name(argv[0]);
 		if (!d) {
 			fprintf(stderr, "vehiclectl: no operation %s (try 'vehiclectl help')\n",
 				argv[0]);
 			return 2;
 		}
+	}
+	if (strcmp(argv[0], "wait") == 0 && argc != 1) {
+		fprintf(stderr, "vehiclectl: wait takes no argument (its limit: --wait-limit S)\n");
+		return 2;
 	}
 	if (!port == !can) {
 		fprintf(stderr, "vehiclectl: give one link: --port DEV or --can IFACE\n");
@@ -544,12 +605,17 @@ int main(int argc, char **argv)
 		sigaction(SIGTERM, &sa, NULL);
 	}
 
-	if (d)
+	if (d) {
 		rc = cmd_op(c, d, argc, argv, json);
-	else if (strcmp(argv[0], "info") == 0)
+		if (rc == 0 && wait)
+			rc = cmd_wait(c, wait_limit, json);
+	} else if (strcmp(argv[0], "wait") == 0) {
+		rc = cmd_wait(c, wait_limit, json);
+	} else if (strcmp(argv[0], "info") == 0) {
 		rc = cmd_info(c, json);
-	else
+	} else {
 		rc = loop_cmd(c, argc, argv, json, strcmp(argv[0], "record") == 0);
+	}
 	vc_close(c);
 	free(c);
 	return rc;

@@ -3,6 +3,9 @@
 #include "client.h"
 
 #include <string.h>
+#include <time.h>
+
+#include "client_io.h"
 
 /* Every row of the table has its vc_<name> function: a row added to
  * commands.def without one fails to compile here. */
@@ -34,6 +37,10 @@ const char *vc_strerror(int err)
 		return "console error";
 	case VC_E_UNSUPPORTED:
 		return "unsupported";
+	case VC_E_STOPPED:
+		return "stopped short";
+	case VC_E_NOT_DONE:
+		return "not done in time";
 	default:
 		return "unknown error";
 	}
@@ -406,4 +413,41 @@ int vc_stop(vc_client_t *c, bool *ret)
 int vc_unlock(vc_client_t *c, bool *ret)
 {
 	return run_void(c, CMD_OP_unlock, ret);
+}
+
+bool vc_state_done(int16_t state)
+{
+	return state == VS_STATE_READY || state == VS_STATE_WARNING;
+}
+
+bool vc_state_stopped(int16_t state)
+{
+	return state == VS_STATE_ALARM || state == VS_STATE_STUCK || state == VS_STATE_LOCKED ||
+	       state == VS_STATE_POWERED || state == VS_STATE_UNPOWERED;
+}
+
+int vc_wait_done(vc_client_t *c, unsigned timeout_ms, int16_t *state, char msg[VS_STATE_MSG_MAX])
+{
+	uint64_t end = vcio_now_ms() + timeout_ms;
+	char m[VS_STATE_MSG_MAX];
+	int16_t st = 0;
+
+	for (;;) {
+		int e = vc_getState(c, NULL, &st, m);
+
+		if (e != VC_OK)
+			return e;
+		if (state)
+			*state = st;
+		if (msg)
+			memcpy(msg, m, sizeof(m));
+		if (vc_state_done(st))
+			return VC_OK;
+		if (vc_state_stopped(st))
+			return VC_E_STOPPED;
+		if (vcio_now_ms() >= end)
+			return VC_E_NOT_DONE;
+		struct timespec ts = {0, VC_WAIT_POLL_MS * 1000000L};
+		nanosleep(&ts, NULL);
+	}
 }

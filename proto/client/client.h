@@ -43,6 +43,8 @@ enum {
 	VC_E_ARG = -6,	       /* an argument that cannot be sent (string too long, ...) */
 	VC_E_REMOTE = -7,      /* console link: the unit answered "error <code> ..." */
 	VC_E_UNSUPPORTED = -8, /* the transport cannot do this (e.g. not built in) */
+	VC_E_STOPPED = -9,     /* vc_wait_done: the unit stopped short (a fault, ...) */
+	VC_E_NOT_DONE = -10,   /* vc_wait_done: still busy or paused at its timeout */
 };
 
 /* Text for a client status ("timeout", "nak", ...). */
@@ -146,5 +148,22 @@ int vc_setServo(vc_client_t *c, bool *ret, bool OnOff);
 int vc_setVelocity(vc_client_t *c, bool *ret, vs_velocity_t vel);
 int vc_stop(vc_client_t *c, bool *ret);
 int vc_unlock(vc_client_t *c, bool *ret);
+
+/* Waiting for motion to be done (spec 6.9, docs/console.md "Waiting for a
+ * motion"). A warning from any refused request stays until clearAlarm, so an
+ * idle unit answers Warning-### as well as Ready: both are done.
+ *   done (VC_OK)            16 Ready, 18 Warning-###
+ *   stopped (VC_E_STOPPED)  19 Alarm-### (a fault), 20 Stuck, 23 Locked,
+ *                           24 Powered, 25 Unpowered: the motion cannot end
+ *                           where it was going without the host
+ *   not yet                 17 Busy, 21 Paused, 22 Avoid, any other code
+ * vc_wait_done polls getState every VC_WAIT_POLL_MS (which also feeds the
+ * link watchdog) until done or stopped, or VC_E_NOT_DONE once timeout_ms
+ * has passed; a link failure returns its VC_E_*. state and msg (either may
+ * be NULL) get the last state read. */
+#define VC_WAIT_POLL_MS 20
+bool vc_state_done(int16_t state);
+bool vc_state_stopped(int16_t state);
+int vc_wait_done(vc_client_t *c, unsigned timeout_ms, int16_t *state, char msg[VS_STATE_MSG_MAX]);
 
 #endif

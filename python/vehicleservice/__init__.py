@@ -7,9 +7,11 @@ console lines on the serial port (python3-serial), or the CAN link
     with vs.open_frames("/dev/ttyUSB0") as v:
         v.setPower(True); v.setServo(True)
         v.moveForward(500.0)
+        v.wait_done()          # Ready, or Warning-### while idle
         print(v.getPosition().value)
 """
-from .client import (ActiveAlarms, Acceleration, Alarm, Position, Reply, State, Vehicle,  # noqa: F401
-                     Velocity, open_can, open_console, open_frames)
-from .errors import ConsoleError, LinkTimeout, NakError, ProtocolError, VehicleError  # noqa: F401
-from .ops import OPERATIONS, table_crc  # noqa: F401
+from .client import (DONE_STATES, STOPPED_STATES, ActiveAlarms, Acceleration, Alarm,  # noqa: F401
+                     Position, Reply, State, Vehicle, Velocity, open_can, open_console, open_frames)
+from .errors import (ConsoleError, LinkTimeout, MotionStopped, NakError, ProtocolError,  # noqa: F401
+                     VehicleError, WaitTimeout)
+from .ops import OPERATIONS, AlarmType, table_crc  # noqa: F401

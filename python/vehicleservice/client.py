@@ -5,13 +5,16 @@ Operations without out-arguments return their boolean result; the others a
 Reply(result, value) with a typed value. A refused operation is not an
 exception: result False (the unit raises a warning alarm saying why).
 Exceptions: ConsoleError for an ``error`` line, NakError for a NAK,
-LinkTimeout when nothing came back.
+LinkTimeout when nothing came back; wait_done's MotionStopped and
+WaitTimeout.
 """
 import math
+import time
 from typing import Generic, List, NamedTuple, TypeVar
 
-from .errors import ProtocolError
-from .ops import ALARM_TYPES, OPERATIONS, PROTOCOL_VERSION, decode_info, decode_outs, encode_args, table_crc
+from .errors import MotionStopped, ProtocolError, WaitTimeout
+from .ops import (ALARM_TYPES, OPERATIONS, PROTOCOL_VERSION, AlarmType, decode_info, decode_outs,
+                  encode_args, table_crc)
 from .transport import CanTransport, ConsoleTransport, FrameTransport
 
 T = TypeVar("T")
@@ -43,9 +46,16 @@ class State(NamedTuple):
     message: str
 
 
+# What getState's code means to a host that waits (docs/console.md,
+# "Waiting for a motion"; spec 6.9): an idle unit with a warning active
+# reads Warning-###, which is done as much as Ready is.
+DONE_STATES = frozenset((16, 18))  # Ready, Warning-###
+STOPPED_STATES = frozenset((19, 20, 23, 24, 25))  # Alarm-###, Stuck, Locked, Powered, Unpowered
+
+
 class Alarm(NamedTuple):
     code: int
-    type: int  # 1 fault, 2 warning
+    type: AlarmType  # == 1 fault, 2 warning; str() gives "fault", "warning"
     source: str
 
 
@@ -293,6 +303,26 @@ class Vehicle:
 
     def unlock(self) -> bool:
         return self._ok("unlock")
+
+    # ---- waiting ------------------------------------------------------------
+    def wait_done(self, timeout: float = 300.0, poll: float = 0.02) -> State:
+        """Polls getState every poll seconds (which feeds the link watchdog)
+        until the unit is done: Ready or Warning-### (a warning left by any
+        refused request keeps an idle unit at Warning-### until clearAlarm).
+        Returns that State. Raises MotionStopped when it stopped short (a
+        fault, Stuck, Locked, servo or power off) and WaitTimeout when it is
+        still busy or paused after timeout seconds."""
+        end = time.monotonic() + timeout
+        while True:
+            st = self.getState().value
+            if st.code in DONE_STATES:
+                return st
+            if st.code in STOPPED_STATES:
+                alarms = self.getActiveAlarm(1).value.alarms
+                raise MotionStopped(st, alarms[0] if alarms else None)
+            if time.monotonic() >= end:
+                raise WaitTimeout(st, timeout)
+            time.sleep(poll)
 
 
 def open_frames(port, **kw) -> Vehicle:

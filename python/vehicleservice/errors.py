@@ -36,3 +36,25 @@ class LinkTimeout(VehicleError, TimeoutError):
 
 class ProtocolError(VehicleError):
     """An answer that does not follow the documented layout."""
+
+
+class MotionStopped(VehicleError):
+    """Vehicle.wait_done: the unit stopped short of done (a fault, Stuck,
+    Locked, servo or power off; docs/console.md). state is its State,
+    alarm its newest Alarm (None when none is active)."""
+
+    def __init__(self, state, alarm=None):
+        self.state = state
+        self.alarm = alarm
+        super().__init__("stopped short: %d %s%s" % (
+            state.code, state.message,
+            "" if alarm is None else " (%d %s \"%s\")" % (alarm.code, alarm.type, alarm.source)))
+
+
+class WaitTimeout(VehicleError, TimeoutError):
+    """Vehicle.wait_done: still busy or paused at the timeout; state is the
+    last State read."""
+
+    def __init__(self, state, timeout):
+        self.state = state
+        super().__init__("not done after %g s: %d %s" % (timeout, state.code, state.message))

@@ -4,6 +4,7 @@ encoding of their arguments (little-endian, no padding).
 Type codes: b boolean, h short, u unsigned long, d double, s string,
 a alarm sequence.
 """
+import enum
 import struct
 
 from .errors import ProtocolError
@@ -50,8 +51,35 @@ OPERATIONS = {
 }
 BY_OPCODE = {v[0]: k for k, v in OPERATIONS.items()}
 
-ALARM_FAULT, ALARM_WARNING = 1, 2
-ALARM_TYPES = {"fault": ALARM_FAULT, "warning": ALARM_WARNING, "unknown": 0}
+
+
+class AlarmType(enum.IntEnum):
+    """The IDL's AlarmType: a number (== 2, int() == 2) whose str is its name
+    as the console and vehiclectl write it ("warning")."""
+    unknown = 0
+    fault = 1
+    warning = 2
+
+    def __str__(self):
+        return self.name
+
+    def __format__(self, spec):
+        # "{:d}" and the like format the number, anything else the name
+        if spec and spec[-1] in "bcdoxXneEfFgG%":
+            return format(int(self), spec)
+        return format(self.name, spec)
+
+
+ALARM_FAULT, ALARM_WARNING = AlarmType.fault, AlarmType.warning
+ALARM_TYPES = {t.name: t for t in AlarmType}
+
+
+def alarm_type(value):
+    """AlarmType of a type number; a number the IDL does not name stays an int."""
+    try:
+        return AlarmType(value)
+    except ValueError:
+        return value
 
 
 def crc16(data, crc=0xFFFF):
@@ -145,7 +173,7 @@ def decode_outs(types, data):
             alarms = []
             for _ in range(count):
                 code_, type_ = struct.unpack("<IB", take(5))
-                alarms.append((code_, type_, string()))
+                alarms.append((code_, alarm_type(type_), string()))
             values.append(alarms)
     if pos != len(data):
         raise ProtocolError("%d bytes after the response" % (len(data) - pos))

@@ -23,15 +23,21 @@ class Sim:
     def watchdog_off(self):
         """For cases whose pauses between requests last as long as a loaded
         host makes them (the watchdog has its own tests)."""
+        got = self.console("$watchdog 0")
+        if got != "ok watchdog 0":
+            raise RuntimeError("vehicle-sim answered %r to $watchdog 0" % got)
+
+    def console(self, line):
+        """One console line on the port ('$sim ...' too), its reply without
+        the line ending; between a client's requests, never during one."""
         fd = os.open(self.path, os.O_RDWR | os.O_NOCTTY)
         try:
             tty.setraw(fd)
-            os.write(fd, b"$watchdog 0\n")
+            os.write(fd, line.encode() + b"\n")
             got = b""
             while not got.endswith(b"\n"):
                 got += os.read(fd, 64)
-            if got != b"ok watchdog 0\n":
-                raise RuntimeError("vehicle-sim answered %r to $watchdog 0" % got)
+            return got[:-1].decode()
         finally:
             os.close(fd)
 

@@ -146,8 +146,8 @@ class Client(unittest.TestCase):
                 j = json.loads(out)
                 al = v2.getActiveAlarm(16).value
                 self.assertEqual(j["numOfActiveAlarm"], al.count)
-                self.assertEqual([(a["code"], a["source"]) for a in j["activeAlarms"]],
-                                 [(a.code, a.source) for a in al.alarms])
+                self.assertEqual([(a["code"], a["type"], a["source"]) for a in j["activeAlarms"]],
+                                 [(a.code, str(a.type), a.source) for a in al.alarms])
 
     def test_errors_naks_timeouts(self):
         s = self.sim()
