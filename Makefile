@@ -112,7 +112,7 @@ run: $(BUILD)/vehicle-sim
 # Suites under QEMU: a Debian kernel (real SocketCAN, GPIO, uinput) and the
 # Cortex-M images on emulated boards (mk/cortexm.mk builds them); QEMU=0
 # leaves them out for a quick local run.
-CHECK_SUITES := tests/run_python_tests.sh \
+CHECK_SUITES := tests/run_python_tests.sh tests/run_python_pkg_tests.sh \
 	$(if $(filter 0,$(QEMU)),,tests/run_qemu_tests.sh tests/qemu/run_fw.sh tests/mcu/run_mcu.sh)
 
 # Test programs that start vehicle-fw and its peers run in the QEMU guest on

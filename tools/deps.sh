@@ -9,7 +9,8 @@ PKGS="build-essential make pkg-config libcmocka-dev libexpat1-dev valgrind clang
 clang-format clang-tidy cppcheck gcc-arm-none-eabi libnewlib-arm-none-eabi socat \
 libgpiod-dev gpiod libmodbus-dev libevdev-dev python3-pymodbus python3-serial-asyncio \
 libclang-rt-14-dev gcovr python3-serial python3-can python3-matplotlib qemu-system-arm \
-omniidl libomniorb4-dev omniorb-nameserver"
+omniidl libomniorb4-dev omniorb-nameserver python3-venv python3-pip python3-setuptools \
+python3-wheel"
 missing=""
 for p in $PKGS; do
 	dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing="$missing $p"
