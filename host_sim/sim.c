@@ -37,7 +37,24 @@ int sim_init_ex(sim_t *s, const vs_config_t *cfg, const plant_params_t *pp, cons
 
 bool sim_exec(sim_t *s, const char *line, char *reply, size_t cap)
 {
-	return console_exec(&s->srv.con, line, reply, cap);
+	bool r = console_exec(&s->srv.con, line, reply, cap);
+
+	sim_alarm_look(s);
+	return r;
+}
+
+void sim_alarm_look(sim_t *s)
+{
+	if (s->alarm_log)
+		alarm_log_poll(s->alarm_log, &s->vehicle.alarms, s->now_us, s->alarm_fn,
+			       s->alarm_ctx);
+}
+
+void sim_set_alarm_log(sim_t *s, alarm_log_t *l, alarm_log_fn fn, void *ctx)
+{
+	s->alarm_log = l;
+	s->alarm_fn = fn;
+	s->alarm_ctx = ctx;
 }
 
 void sim_tick(sim_t *s)
@@ -45,7 +62,10 @@ void sim_tick(sim_t *s)
 	uint64_t hz = s->cfg.tick_hz;
 	/* Integer period bookkeeping: no drift at rates that do not divide 1e6. */
 	uint64_t next_us = (s->ticks + 1) * 1000000u / hz;
+	/* what requests since the last tick raised, then the tick's own */
+	sim_alarm_look(s);
 	vehicle_tick(&s->vehicle, (uint32_t)s->now_us);
+	sim_alarm_look(s);
 	plant_step(&s->plant, (uint32_t)(next_us - s->now_us));
 	s->ticks++;
 	s->now_us = next_us;

@@ -38,6 +38,7 @@
 #include <stdint.h>
 
 #include "../firmware/vehicle.h"
+#include "../proto/alarm_log.h"
 #include "../proto/server.h"
 #include "plant.h"
 #include "sim_hal.h"
@@ -62,6 +63,10 @@ struct sim {
 	 * (answering it early, then holding the port, would stall the link). */
 	bool realtime;
 	trace_t *trace;
+	/* vehicle-sim: alarm events to its log (proto/alarm_log.h); NULL: none */
+	alarm_log_t *alarm_log;
+	alarm_log_fn alarm_fn;
+	void *alarm_ctx;
 };
 
 /* Returns 0, or vehicle_init's negative value (invalid configuration; the
@@ -84,6 +89,12 @@ void sim_set_realtime(sim_t *s, bool on);
 void sim_set_output(sim_t *s, console_write_fn fn, void *ctx);
 /* Trace every tick into t (NULL: none); the caller owns t. */
 void sim_set_trace(sim_t *s, trace_t *t);
+/* Alarm events through l to fn (l NULL: none); the caller owns l. The list
+ * is looked at before and after every tick and after every sim_exec; a main
+ * that runs requests otherwise (the server's links, console_feed) calls
+ * sim_alarm_look after them. */
+void sim_set_alarm_log(sim_t *s, alarm_log_t *l, alarm_log_fn fn, void *ctx);
+void sim_alarm_look(sim_t *s);
 
 static inline plant_t *sim_plant(sim_t *s)
 {

@@ -61,6 +61,15 @@ typedef struct {
 
 static app_t app;
 
+/* Alarm events go to the log (stderr), in simulated time. */
+static alarm_log_t alarm_events;
+
+static void log_alarm(void *ctx, const char *line)
+{
+	(void)ctx;
+	rt_log(LOG_NOTICE, "%s", line);
+}
+
 static void write_stdout(void *ctx, const char *s, size_t n)
 {
 	app_t *a = ctx;
@@ -83,6 +92,7 @@ static void feed_lines(app_t *a)
 		}
 		bool ended = a->in[n - 1] == '\n' || a->in[n - 1] == '\r';
 		console_feed(&a->sim.srv.con, (const uint8_t *)a->in, n);
+		sim_alarm_look(&a->sim);
 		memmove(a->in, a->in + n, a->in_len - n);
 		a->in_len -= n;
 		if (a->eof && a->in_len == 0 && !ended)
@@ -187,8 +197,10 @@ static int run_pty_fast(app_t *a)
 				continue;
 			return 1;
 		}
-		if (more || (p[0].revents & (POLLIN | POLLOUT)))
+		if (more || (p[0].revents & (POLLIN | POLLOUT))) {
 			server_poll(srv, (uint32_t)a->sim.now_us);
+			sim_alarm_look(&a->sim);
+		}
 		if (!(p[1].revents & (POLLIN | POLLHUP | POLLERR)))
 			continue;
 		if (!read_input(a))
@@ -247,6 +259,7 @@ static int run_realtime(app_t *a)
 		}
 		sim_tick(&a->sim);
 		server_poll(&a->sim.srv, (uint32_t)a->sim.now_us);
+		sim_alarm_look(&a->sim);
 		rt_clock_wait(&clk, NULL);
 	}
 	return 0;
@@ -507,6 +520,8 @@ int main(int argc, char **argv)
 		return 1;
 	}
 	sim_set_output(&a->sim, write_stdout, a);
+	alarm_log_init(&alarm_events);
+	sim_set_alarm_log(&a->sim, &alarm_events, log_alarm, NULL);
 	if (realtime)
 		sim_set_realtime(&a->sim, true);
 

@@ -1240,6 +1240,8 @@ static void test_client_timeout(void **state)
 /* vehiclectl against vehicle-sim --pty, as a user would. */
 static pid_t SIM_PID;
 static char PTY_PATH[256];
+/* Set: the simulator's stderr (its log) goes to this file. */
+static const char *SIM_STDERR;
 
 static void start_sim_traced(const char *trace)
 {
@@ -1254,6 +1256,8 @@ static void start_sim_traced(const char *trace)
 	if (SIM_PID == 0) {
 		dup2(p[1], 1);
 		close(p[0]);
+		if (SIM_STDERR && !freopen(SIM_STDERR, "w", stderr))
+			_exit(126);
 		if (trace)
 			execl(exe, exe, "--pty", "--config", "config/vehicle.xml", "--io",
 			      "config/io.xml", "--trace", trace, (char *)NULL);
@@ -1426,10 +1430,15 @@ static void test_vehiclectl(void **state)
 static void test_vehiclectl_wait(void **state)
 {
 	static char out[4096];
+	char log[64], line[256], events[2048] = "";
 	double x = 0, y = 1, th = 1;
+	FILE *f;
 
 	(void)state;
+	snprintf(log, sizeof(log), "/tmp/vsls-%d.log", (int)getpid());
+	SIM_STDERR = log;
 	start_sim();
+	SIM_STDERR = NULL;
 	/* a process per request: pauses as long as a loaded host makes them */
 	sim_line("$watchdog 0\n", "ok watchdog 0\n");
 	assert_int_equal(ctl(out, sizeof(out), "--port %s wait now", PTY_PATH), 2);
@@ -1468,6 +1477,29 @@ static void test_vehiclectl_wait(void **state)
 	assert_int_equal(ctl(out, sizeof(out), "--port %s --wait stop", PTY_PATH), 0);
 	assert_string_equal(out, "true\ndone state=16 Msg=\"Ready\"\n");
 	stop_sim();
+	/* its log: every alarm as it was raised and cleared (in real time: the
+	 * lines without their times) */
+	f = fopen(log, "r");
+	assert_non_null(f);
+	while (fgets(line, sizeof(line), f)) {
+		char *at = strstr(line, " at ");
+
+		if (strncmp(line, "vehicle-sim: alarm ", 19) != 0)
+			continue;
+		assert_non_null(at);
+		assert_string_equal(at + strlen(at) - 3, " s\n");
+		strcpy(at, "\n");
+		strncat(events, line + 13, sizeof(events) - strlen(events) - 1);
+	}
+	fclose(f);
+	unlink(log);
+	assert_string_equal(events,
+			    "alarm raised 111 warning \"setVelocity refused: out of limits\"\n"
+			    "alarm raised 110 warning \"moveForward refused: invalid argument\"\n"
+			    "alarm raised 201 fault \"drive 1 fault 0x2310\"\n"
+			    "alarm cleared 111 warning \"setVelocity refused: out of limits\"\n"
+			    "alarm cleared 110 warning \"moveForward refused: invalid argument\"\n"
+			    "alarm cleared 201 fault \"drive 1 fault 0x2310\"\n");
 }
 
 /* A failed test leaves no simulator behind. */

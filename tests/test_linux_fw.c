@@ -673,6 +673,40 @@ static void test_fw_sigterm_idle(void **state)
 	MASTER = -1;
 }
 
+/* Each alarm goes to the log as it is raised and cleared, timed from the
+ * loop's start: a refusal's warning, then clearAlarm. */
+static void test_fw_alarm_events(void **state)
+{
+	(void)state;
+	char reply[512], log[8192];
+	const char *raised, *cleared;
+	double t1 = -1, t2 = -1;
+	write_fw_config();
+	start_fw();
+	fw_sleep_ms(200);
+	console("setServo true", reply, sizeof(reply));
+	assert_string_equal(reply, "ok false");
+	fw_sleep_ms(100);
+	console("clearAlarm", reply, sizeof(reply));
+	assert_string_equal(reply, "ok true");
+	assert_int_equal(stop_fw(), 0);
+	fw_read_log(log, sizeof(log));
+	raised = strstr(log, "vehicle-fw: alarm raised 128 warning \"setServo refused: power off\" "
+			     "at ");
+	cleared = strstr(log, "vehicle-fw: alarm cleared 128 warning \"setServo refused: power "
+			      "off\" at ");
+	if (!raised || !cleared || cleared < raised || !strchr(cleared, '\n') ||
+	    sscanf(strstr(raised, " at "), " at %lf s\n", &t1) != 1 ||
+	    sscanf(strstr(cleared, " at "), " at %lf s\n", &t2) != 1 ||
+	    /* cleared at least 100 ms after it was raised */
+	    !(t1 > 0.0 && t1 < 60.0 && t2 - t1 >= 0.09 && t2 < 60.0) ||
+	    /* nothing else */
+	    strstr(strchr(raised, '\n'), "alarm raised") || strstr(strchr(cleared, '\n'), "alarm "))
+		fail_msg("vehicle-fw logged:\n%s", log);
+	close(MASTER);
+	MASTER = -1;
+}
+
 /* Start-up errors: exit status 1 and one message. */
 static void test_fw_bad_config(void **state)
 {
@@ -719,6 +753,7 @@ int main(int argc, char **argv)
 	const struct CMUnitTest process[] = {
 	    cmocka_unit_test_teardown(test_fw_link_and_sigterm_mid_move, teardown),
 	    cmocka_unit_test_teardown(test_fw_sigterm_idle, teardown),
+	    cmocka_unit_test_teardown(test_fw_alarm_events, teardown),
 	    cmocka_unit_test_teardown(test_fw_pipelined_and_long_comment, teardown),
 	    cmocka_unit_test_teardown(test_fw_bad_config, teardown),
 	};

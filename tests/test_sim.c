@@ -328,6 +328,42 @@ static void omni_config_on_ideal_plant(void **state)
 		fail_msg("vehicle-sim printed:\n%s", out);
 }
 
+/* vehicle-sim logs each alarm as it is raised and cleared, in simulated
+ * time (lockstep: the same lines on every run): refusals at once, a drive
+ * fault at the tick that finds it, clearAlarm's clearing. */
+static void sim_logs_alarm_events(void **state)
+{
+	(void)state;
+	char cmd[1200], out[2048];
+	snprintf(
+	    cmd, sizeof(cmd),
+	    "printf 'setServo true\\nsetPower true\\nsetServo true\\nmoveForward 300\\n"
+	    "moveTurn 5\\n$wait 100\\n$sim drive 0 fault 0x2310\\n$wait 50\\n$sim drive 0 ok\\n"
+	    "clearAlarm\\n$wait 10\\nsetVelocity 0 1\\n$wait 10\\n' | %s/vehicle-sim --fast "
+	    "--config config/vehicle.xml --io config/io.xml 2>&1 >/dev/null",
+	    BUILD_DIR);
+	FILE *f = popen(cmd, "r");
+	assert_non_null(f);
+	size_t n = fread(out, 1, sizeof(out) - 1, f);
+	out[n] = '\0';
+	assert_int_equal(pclose(f), 0);
+	const char *want =
+	    "vehicle-sim: differential base, 2 axes, 1000 Hz, fast mode (config/vehicle.xml, "
+	    "config/io.xml)\n"
+	    "vehicle-sim: alarm raised 128 warning \"setServo refused: power off\" at 0.000 s\n"
+	    "vehicle-sim: alarm raised 120 warning \"moveTurn refused: unit not ready\" at 0.000 "
+	    "s\n"
+	    "vehicle-sim: alarm raised 201 fault \"drive 0 fault 0x2310\" at 0.100 s\n"
+	    "vehicle-sim: alarm cleared 128 warning \"setServo refused: power off\" at 0.150 s\n"
+	    "vehicle-sim: alarm cleared 120 warning \"moveTurn refused: unit not ready\" at 0.150 "
+	    "s\n"
+	    "vehicle-sim: alarm cleared 201 fault \"drive 0 fault 0x2310\" at 0.150 s\n"
+	    "vehicle-sim: alarm raised 111 warning \"setVelocity refused: out of limits\" at "
+	    "0.160 s\n";
+	if (strcmp(out, want) != 0)
+		fail_msg("vehicle-sim logged:\n%s", out);
+}
+
 static void bad_config_rejected(void **state)
 {
 	(void)state;
@@ -355,6 +391,7 @@ int main(int argc, char **argv)
 	    cmocka_unit_test(bad_config_rejected),
 	    cmocka_unit_test(hires_resolution_follows_the_limits),
 	    cmocka_unit_test(omni_config_on_ideal_plant),
+	    cmocka_unit_test(sim_logs_alarm_events),
 	};
 	/* build/tests/test_sim -> build */
 	if (argc > 0 && strrchr(argv[0], '/')) {

@@ -24,6 +24,7 @@
 #include "lhal.h"
 #include "../posix/rt.h"
 #include "../posix/tty.h"
+#include "../../proto/alarm_log.h"
 #include "../../proto/numparse.h"
 #include "../../proto/server.h"
 #include "../posix/socketcan.h"
@@ -59,9 +60,27 @@ typedef struct {
 	rt_status_t rt;
 	rt_stats_t st;
 	rt_clock_t clk;
+	alarm_log_t alarms; /* the list at the last look: its changes go to the log */
 } app_t;
 
 static app_t app;
+
+static void log_alarm(void *ctx, const char *line)
+{
+	(void)ctx;
+	rt_log(LOG_NOTICE, "%s", line);
+}
+
+/* Alarm events (proto/alarm_log.h), timed from the loop's start. */
+static void look_at_alarms(app_t *a)
+{
+	struct timespec now;
+
+	clock_gettime(CLOCK_MONOTONIC, &now);
+	long long ns = ts_diff_ns(&now, &a->clk.t0);
+	alarm_log_poll(&a->alarms, &a->v.alarms, ns > 0 ? (uint64_t)ns / 1000u : 0, log_alarm,
+		       NULL);
+}
 
 static size_t port_read(void *ctx, uint8_t *buf, size_t max)
 {
@@ -128,8 +147,11 @@ static void tick(app_t *a, bool serve)
 	uint32_t us = rt_clock_now_us(&a->clk);
 	lhal_pre_tick(&a->hal, us);
 	vehicle_tick(&a->v, us);
-	if (serve)
+	look_at_alarms(a);
+	if (serve) {
 		server_poll(&a->srv, us);
+		look_at_alarms(a);
+	}
 	a->st.ticks++;
 	uint64_t busy = (cpu_ns() - c0) / 1000u;
 	uint32_t busy_us = busy > UINT32_MAX ? UINT32_MAX : (uint32_t)busy;
@@ -442,6 +464,7 @@ int main(int argc, char **argv)
 	rt_log_open("vehicle-fw", o.use_syslog);
 
 	app_t *a = &app;
+	alarm_log_init(&a->alarms);
 	backend_cfg_t bk;
 	if (open_unit(a, &o, &bk) < 0)
 		return 1;
