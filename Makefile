@@ -49,9 +49,10 @@ CFLAGS_tests := $(CFLAGS_BASE) $(HOST_DEFS) -Wno-missing-prototypes
 FW_SRC := $(wildcard firmware/*.c)
 # proto/: the unit's side and what it shares with hosts; proto/client/: the
 # host's client library. hal/posix/: host support (configuration reader,
-# SocketCAN, tty, clock, log) for the Linux main, the simulator and tools.
+# SocketCAN, tty, clock, log) for the Linux main, the simulator and tools;
+# hal/modbus/: Modbus drive profiles (plain C, shared with a board's master).
 PROTO_SRC := $(wildcard proto/*.c proto/client/*.c)
-HOST_SRC := $(wildcard hal/posix/*.c)
+HOST_SRC := $(wildcard hal/posix/*.c hal/modbus/*.c)
 SIM_SRC := $(filter-out %_main.c,$(wildcard host_sim/*.c))
 TEST_SRC := $(wildcard tests/test_*.c)
 TEST_SUPPORT_SRC := $(filter-out tests/test_%,$(wildcard tests/*.c)) $(wildcard tests/model/*.c)

@@ -63,6 +63,7 @@ enum {
 	ALM_F_LOOP_STALL = 210,	       /* a tick came later than loop_late_ms */
 	ALM_F_DRIVE_NOT_ENABLED = 211, /* servo on: a drive did not reach Operation enabled */
 	ALM_F_DRIVE_DISABLED = 212,    /* an enabled drive left Operation enabled */
+	ALM_F_DRIVE_MAP = 213,	       /* a drive rejects the registers the master uses */
 };
 
 typedef struct {

@@ -130,11 +130,20 @@ static inline void supervise_encoder(vehicle_t *v, uint8_t i, bool moved)
 		encoder_stuck(v, i);
 }
 
-static COLD void drive_silent_report(vehicle_t *v, uint8_t i)
+/* No sample for drive_timeout_ms: 202, saying "busy" when the drive only
+ * answered that; 213 when it answered that it has no such register or
+ * function (the register map is wrong: waiting does not help). */
+static COLD void drive_silent_report(vehicle_t *v, uint8_t i, uint8_t why)
 {
 	char s[VS_ALARM_SOURCE_MAX];
 	v->drive_timeout_reported[i] = true;
-	vehicle_axis_text(s, sizeof s, "drive ", i, " not answering");
+	if (why == HAL_SILENT_MAP) {
+		vehicle_axis_text(s, sizeof s, "drive ", i, " rejects its register map");
+		vehicle_raise_fault(v, ALM_F_DRIVE_MAP, s);
+		return;
+	}
+	vehicle_axis_text(s, sizeof s, "drive ", i,
+			  why == HAL_SILENT_BUSY ? " not answering: busy" : " not answering");
 	vehicle_raise_fault(v, ALM_F_DRIVE_TIMEOUT, s);
 }
 
@@ -258,7 +267,7 @@ static inline __attribute__((always_inline)) bool sample_drives(vehicle_t *v)
 				v->drive_silent_ticks[i]++;
 			if (v->powered && v->drive_silent_ticks[i] > v->drive_timeout_ticks &&
 			    !v->drive_timeout_reported[i])
-				drive_silent_report(v, i);
+				drive_silent_report(v, i, st.silent_why);
 			supervise_encoder(v, i, false);
 			st.enabled = v->drive[i].enabled; /* as last reported */
 		} else {

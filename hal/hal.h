@@ -33,6 +33,15 @@ typedef enum {
 	HAL_DRIVE_STATE_COUNT
 } hal_drive_phase_t;
 
+/* Why a drive's report is not fresh, when the backend knows more than
+ * silence: the drive answers, but not with a sample. */
+enum {
+	HAL_SILENT_NO_REPLY = 0, /* nothing usable came back */
+	HAL_SILENT_BUSY = 1,	 /* the drive answers "busy" (Modbus exception 6) */
+	HAL_SILENT_MAP = 2,	 /* the drive rejects the registers the master uses
+				    (Modbus exception 1 or 2: the register map is wrong) */
+};
+
 /* Eight bytes (the flags are bits): the tick copies one a drive, in one
  * register on a 64-bit host (12 bytes cost the cruise tick 8 instructions a
  * drive, tools/bench/tickcost.sh). */
@@ -51,7 +60,12 @@ typedef struct {
 	 * refuses motion until setPosition. A drive that comes back without
 	 * restarting keeps counting and does not set it. */
 	bool position_lost : 1;
+	/* With fresh false: HAL_SILENT_*, why no sample came. */
+	uint8_t silent_why : 2;
 } hal_drive_state_t;
+#ifndef __cplusplus
+_Static_assert(sizeof(hal_drive_state_t) == 8, "the drive report is eight bytes");
+#endif
 
 typedef struct {
 	int16_t axis[3]; /* x (forward), y (left), rotation (CCW); +-32767 full scale */

@@ -90,8 +90,9 @@ install: $(BUILD)/vehicle-fw $(BUILD)/vehiclectl $(BUILD)/vehicle-sim
 
 CHECK_SUITES += tests/run_install_tests.sh
 
-# Modbus RTU drive simulator for the tests (host_sim/devices/).
-$(BUILD)/mbdrive-sim: $(BUILD)/obj/host_sim/devices/mbdrive_sim_main.o
+# Modbus RTU drive simulator for the tests (host_sim/devices/), on the
+# drive profiles of hal/modbus/ (in the host library).
+$(BUILD)/mbdrive-sim: $(BUILD)/obj/host_sim/devices/mbdrive_sim_main.o $(HOST_LIB)
 	@$(if $(Q),echo "  LD      $@")
 	$(Q)$(CC) $(LDFLAGS) -o $@ $^ -lmodbus
 

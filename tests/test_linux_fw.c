@@ -72,7 +72,8 @@ static void test_backends_parsed(void **state)
 	    "    <modbus bus=\"1\" device=\"/dev/ttyUSB0\" baud=\"57600\" parity=\"E\"\n"
 	    "            stop_bits=\"2\" timeout_ms=\"25\" retries=\"3\" reg_target_speed=\"16\"\n"
 	    "            reg_position=\"18\" reg_status=\"20\" reg_alarm=\"21\"\n"
-	    "            reg_servo_on=\"40\" reg_fault_reset=\"41\"/>\n"
+	    "            reg_servo_on=\"40\" reg_fault_reset=\"41\" reg_comm_timeout=\"42\"\n"
+	    "            comm_timeout_ms=\"150\"/>\n"
 	    "    <drive axis=\"0\" type=\"modbus\" bus=\"1\" unit=\"7\"/>\n"
 	    "  </backends>\n"
 	    "</vehicle>\n");
@@ -87,13 +88,48 @@ static void test_backends_parsed(void **state)
 	assert_int_equal(b.bus[1].stop_bits, 2);
 	assert_int_equal(b.bus[1].timeout_ms, 25);
 	assert_int_equal(b.bus[1].retries, 3);
-	assert_int_equal(b.bus[1].reg[BK_REG_TARGET_SPEED], 16);
-	assert_int_equal(b.bus[1].reg[BK_REG_POSITION], 18);
-	assert_int_equal(b.bus[1].reg[BK_REG_STATUS], 20);
-	assert_int_equal(b.bus[1].reg[BK_REG_ALARM], 21);
-	assert_int_equal(b.bus[1].reg[BK_REG_SERVO_ON], 40);
-	assert_int_equal(b.bus[1].reg[BK_REG_FAULT_RESET], 41);
+	/* today's attributes: the generic profile at these addresses */
+	const mb_profile_t *p = &b.bus[1].prof;
+	assert_string_equal(p->name, "generic");
+	assert_int_equal(p->reg[MBP_SPEED].addr, 16);
+	assert_int_equal(p->reg[MBP_SPEED].words, 2);
+	assert_int_equal(p->reg[MBP_POSITION].addr, 18);
+	assert_int_equal(p->reg[MBP_STATUS].addr, 20);
+	assert_int_equal(p->reg[MBP_ALARM].addr, 21);
+	assert_int_equal(p->reg[MBP_ENABLE].addr, 40);
+	assert_int_equal(p->reg[MBP_RESET].addr, 41);
+	assert_int_equal(p->reg[MBP_COMM_TIMEOUT].addr, 42);
+	assert_int_equal(p->reg[MBP_COMM_TIMEOUT].words, 1);
+	assert_int_equal(b.bus[1].comm_timeout_ms, 150);
+	assert_false(b.bus[1].comm_stop_none);
+	assert_int_equal(b.bus[1].byte_timeout_ms, 0);
+	assert_int_equal(b.drive_channel[0], 0);
 	assert_int_equal(b.drive_type[1], BK_DRIVE_LOOPBACK);
+
+	/* A named profile with fields changed, two channels of one unit, no
+	 * communication-loss stop acknowledged. */
+	fw_write_file(FW_VPATH, VEHICLE_HEAD
+		      "  <backends>\n"
+		      "    <modbus bus=\"0\" device=\"/dev/ttyUSB0\" speed_scale=\"16384/600\"\n"
+		      "            position=\"0x3000+2 s32 lo input\" profile=\"zlac8015d\"\n"
+		      "            comm_stop=\"none\" byte_timeout_ms=\"3\"/>\n"
+		      "    <drive axis=\"0\" type=\"modbus\" bus=\"0\" unit=\"4\"/>\n"
+		      "    <drive axis=\"1\" type=\"modbus\" bus=\"0\" unit=\"4\" channel=\"1\"\n"
+		      "           polarity=\"reverse\"/>\n"
+		      "  </backends>\n</vehicle>\n");
+	assert_int_equal(backend_cfg_load(FW_VPATH, &b, err, sizeof(err)), 0);
+	p = &b.bus[0].prof;
+	assert_string_equal(p->name, "zlac8015d");
+	assert_int_equal(p->speed_num, 16384);
+	assert_int_equal(p->speed_den, 600);
+	assert_int_equal(p->reg[MBP_POSITION].addr, 0x3000);
+	assert_int_equal(p->reg[MBP_POSITION].flags, MBP_SIGNED | MBP_LOW_FIRST | MBP_INPUT);
+	assert_int_equal(p->reg[MBP_SPEED].addr, 0x2088);
+	assert_true(b.bus[0].comm_stop_none);
+	assert_int_equal(b.bus[0].byte_timeout_ms, 3);
+	assert_int_equal(b.drive_unit[1], 4);
+	assert_int_equal(b.drive_channel[1], 1);
+	assert_true(b.drive_reverse[1]);
 
 	/* The battery from a Modbus register: every attribute, then the
 	 * defaults (holding register, 16 bits, 1 mV per count, 200 ms). */
@@ -244,6 +280,38 @@ static void test_backends_errors(void **state)
 	    {"<drive axis=\"0\" type=\"modbus\" bus=\"1\" unit=\"1\"/>",
 	     "drive.bus: no <modbus bus=\"1\"> for axis 0"},
 	    {"<modbus bus=\"0\" device=\"/dev/ttyUSB0\"/>", "modbus.reg_target_speed: required"},
+	    {"<modbus bus=\"0\" device=\"/dev/ttyUSB0\" profile=\"zlac\"/>",
+	     "modbus.profile: unknown profile (generic, zlac8015d) 'zlac'"},
+	    {"<modbus bus=\"0\" device=\"/dev/ttyUSB0\" profile=\"zlac8015d\" speed=\"1 s8\"/>",
+	     "modbus.speed: not a register: ADDR[+STEP] u16|s16|u32|s32 [hi|lo] [holding|input], "
+	     "or none '1 s8'"},
+	    {"<modbus bus=\"0\" device=\"/dev/ttyUSB0\" profile=\"zlac8015d\" status=\"none\"/>",
+	     "modbus.profile: speed, position, status and enable are required 'zlac8015d'"},
+	    {"<modbus bus=\"0\" device=\"/dev/ttyUSB0\" profile=\"zlac8015d\" comm_stop=\"x\"/>",
+	     "modbus.comm_stop: drive or none 'x'"},
+	    {"<modbus bus=\"0\" device=\"/dev/ttyUSB0\" profile=\"zlac8015d\" "
+	     "comm_timeout_ms=\"5\"/>",
+	     "modbus.comm_timeout_ms: out of range 10..60000 '5'"},
+	    {"<modbus bus=\"0\" device=\"/dev/ttyUSB0\" profile=\"zlac8015d\"/>"
+	     "<drive axis=\"0\" type=\"modbus\" bus=\"0\" unit=\"1\" channel=\"2\"/>",
+	     "drive.channel: out of range 0..1 '2'"},
+	    {"<modbus bus=\"0\" device=\"/dev/ttyUSB0\" profile=\"zlac8015d\"/>"
+	     "<drive axis=\"0\" type=\"modbus\" bus=\"0\" unit=\"1\" channel=\"1\"/>"
+	     "<drive axis=\"1\" type=\"modbus\" bus=\"0\" unit=\"1\" channel=\"1\"/>",
+	     "drive.unit: also axis 0's unit and channel on modbus bus 0 '1'"},
+	    {"<modbus bus=\"0\" device=\"/dev/ttyUSB0\" reg_target_speed=\"0\" reg_position=\"2\" "
+	     "reg_status=\"4\" reg_alarm=\"5\" reg_servo_on=\"6\" reg_fault_reset=\"7\" "
+	     "comm_stop=\"none\"/><drive axis=\"0\" type=\"modbus\" bus=\"0\" unit=\"1\" "
+	     "channel=\"1\"/>",
+	     "drive.channel: profile generic has 1 channel '1'"},
+	    {"<modbus bus=\"0\" device=\"/dev/ttyUSB0\" reg_target_speed=\"0\" reg_position=\"2\" "
+	     "reg_status=\"4\" reg_alarm=\"5\" reg_servo_on=\"6\" reg_fault_reset=\"7\"/>"
+	     "<drive axis=\"0\" type=\"modbus\" bus=\"0\" unit=\"1\"/>",
+	     "modbus.comm_stop: profile generic has no comm_timeout register: give "
+	     "reg_comm_timeout, or comm_stop=\"none\" for drives that run on when the bus falls "
+	     "silent 'drive'"},
+	    {"<drive axis=\"0\" type=\"loopback\" channel=\"0\"/>",
+	     "drive.channel: only for modbus"},
 	    {"<modbus bus=\"0\" device=\"/dev/ttyUSB0\" parity=\"X\"/>",
 	     "modbus.parity: N, E or O 'X'"},
 	    {"<modbus bus=\"0\" device=\"ttyUSB0\"/>",
@@ -322,7 +390,7 @@ static void test_backends_errors(void **state)
 	    {"<drive axis=\"0\" type=\"loopback\"><x/></drive>", "x: unknown element"},
 	};
 	for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
-		char text[1024], want[1024], err[256] = "";
+		char text[1024], want[1024], err[512] = "";
 		backend_cfg_t b;
 		snprintf(text, sizeof(text),
 			 VEHICLE_HEAD "  <backends>\n%s\n  </backends>\n</vehicle>\n",

@@ -20,7 +20,8 @@ REMAKE="make figures"
 
 FIGURES="cruise stops"
 
-# figure NAME: sets file, configs, every, script, plot (vehicle-plot's options).
+# figure NAME: sets file, configs (its run's vehicle.xml and io.xml), every
+# (--trace-every), script (its console lines) and plot (vehicle-plot's options).
 figure() {
 	case $1 in
 	cruise) # the README's example, drawn as it says
@@ -62,12 +63,13 @@ hashes() {
 }
 
 make_one() { # make_one NAME BUILD
-	local name=$1 build=$2 tmp out
+	local name=$1 build=$2 tmp out vehicle io
 	figure "$name"
+	read -r vehicle io <<<"$configs"
 	tmp=$(mktemp -d)
 	# shellcheck disable=SC2059 # the script is a printf format, as in the README
-	out=$(printf "$script" | "$build/vehicle-sim" --fast --config config/vehicle.xml \
-		--io config/io.xml --trace "$tmp/run.csv" --trace-every "$every" 2>&1) || {
+	out=$(printf "$script" | "$build/vehicle-sim" --fast --config "$vehicle" --io "$io" \
+		--trace "$tmp/run.csv" --trace-every "$every" 2>&1) || {
 		printf '%s\n' "$out"
 		echo "figures: $name: vehicle-sim failed" >&2
 		return 1

@@ -15,6 +15,7 @@ typedef struct {
 	unsigned long drive_line[VS_MAX_AXES];
 	unsigned long at_line; /* nonzero: report this line instead of the element's */
 	unsigned long battery_line;
+	unsigned long modbus_line[BK_MODBUS_BUSES];
 } bctx_t;
 
 static const char *const line_names[BK_LINE_SERVO0 + 1] = {
@@ -79,6 +80,7 @@ _Static_assert(BK_CANOPEN_BUSES == BK_MODBUS_BUSES, "drive.bus range");
 static int drive_elem(bctx_t *c, const char **a)
 {
 	uint32_t axis = UINT32_MAX, bus = UINT32_MAX, unit = UINT32_MAX, node = UINT32_MAX;
+	uint32_t channel = UINT32_MAX;
 	int type = -1, reverse = -1;
 	for (; a[0]; a += 2) {
 		if (!strcmp(a[0], "axis")) {
@@ -102,6 +104,10 @@ static int drive_elem(bctx_t *c, const char **a)
 		} else if (!strcmp(a[0], "node")) {
 			if (get_uint(c, "drive", "node", a[1], 1, 127, &node))
 				return -1;
+		} else if (!strcmp(a[0], "channel")) {
+			if (get_uint(c, "drive", "channel", a[1], 0, MBP_CHANNELS_MAX - 1,
+				     &channel))
+				return -1;
 		} else if (!strcmp(a[0], "polarity")) {
 			if (strcmp(a[1], "normal") != 0 && strcmp(a[1], "reverse") != 0)
 				return fail(c, "drive.polarity: normal or reverse '%s'", a[1]);
@@ -123,6 +129,7 @@ static int drive_elem(bctx_t *c, const char **a)
 				    bus == UINT32_MAX ? "bus" : "unit");
 		c->b->drive_bus[axis] = (uint8_t)bus;
 		c->b->drive_unit[axis] = (uint8_t)unit;
+		c->b->drive_channel[axis] = channel == UINT32_MAX ? 0 : (uint8_t)channel;
 	} else if (type == BK_DRIVE_CIA402) {
 		if (bus == UINT32_MAX || node == UINT32_MAX)
 			return fail(c, "drive.%s: required for cia402",
@@ -134,6 +141,8 @@ static int drive_elem(bctx_t *c, const char **a)
 	}
 	if (unit != UINT32_MAX && type != BK_DRIVE_MODBUS)
 		return fail(c, "drive.unit: only for modbus");
+	if (channel != UINT32_MAX && type != BK_DRIVE_MODBUS)
+		return fail(c, "drive.channel: only for modbus");
 	if (node != UINT32_MAX && type != BK_DRIVE_CIA402)
 		return fail(c, "drive.node: only for cia402");
 	if (reverse >= 0 && type == BK_DRIVE_LOOPBACK)
@@ -144,27 +153,78 @@ static int drive_elem(bctx_t *c, const char **a)
 	return 0;
 }
 
-static const char *const reg_names[BK_REG_COUNT] = {
-    "reg_target_speed", "reg_position", "reg_status",
-    "reg_alarm",	"reg_servo_on", "reg_fault_reset",
+/* The generic profile's addresses, in MBP_* order. */
+static const char *const reg_names[MBP_REG_COUNT] = {
+    "reg_target_speed", "reg_position",	   "reg_status",       "reg_alarm",
+    "reg_servo_on",	"reg_fault_reset", "reg_comm_timeout",
 };
+
+/* The profile first (attributes come in document order): the others
+ * change its fields. */
+static int modbus_profile(bctx_t *c, const char **a, mb_profile_t *p)
+{
+	const mb_profile_t *base = mbp_builtin("generic");
+	for (; a[0]; a += 2) {
+		if (strcmp(a[0], "profile") != 0)
+			continue;
+		base = mbp_builtin(a[1]);
+		if (!base)
+			return fail(c, "modbus.profile: unknown profile (generic, zlac8015d) '%s'",
+				    a[1]);
+	}
+	*p = *base;
+	return 0;
+}
+
+/* One attribute of the profile's text form or a reg_* address; *hit false
+ * when the name is neither. */
+static int modbus_prof_attr(bctx_t *c, const char **a, bk_modbus_bus_t *m, bool *given, bool *hit)
+{
+	*hit = true;
+	for (int i = 0; i < MBP_REG_COUNT; i++) {
+		if (strcmp(a[0], reg_names[i]) != 0)
+			continue;
+		uint32_t v;
+		if (get_uint(c, "modbus", a[0], a[1], 0, 65535, &v))
+			return -1;
+		mbp_reg_t *r = &m->prof.reg[i];
+		r->addr = (uint16_t)v;
+		if (r->words == 0) /* reg_comm_timeout: one register of ms */
+			r->words = 1;
+		given[i] = true;
+		return 0;
+	}
+	const char *why = mbp_set(&m->prof, a[0], a[1]);
+	if (why && !strcmp(why, "unknown")) {
+		*hit = false;
+		return 0;
+	}
+	if (why)
+		return fail(c, "modbus.%s: %s '%s'", a[0], why, a[1]);
+	for (int i = 0; i < MBP_REG_COUNT; i++)
+		given[i] = given[i] || !strcmp(a[0], mbp_reg_name((unsigned)i));
+	return 0;
+}
 
 static int modbus_elem(bctx_t *c, const char **a)
 {
-	bk_modbus_bus_t m = {
-	    .baud = 115200, .parity = 'N', .stop_bits = 1, .timeout_ms = 20, .retries = 1};
+	bk_modbus_bus_t m = {.baud = 115200,
+			     .parity = 'N',
+			     .stop_bits = 1,
+			     .timeout_ms = 20,
+			     .retries = 1,
+			     .comm_timeout_ms = 200};
 	uint32_t bus = UINT32_MAX;
-	bool have_reg[BK_REG_COUNT] = {false};
+	bool given[MBP_REG_COUNT] = {false};
+	if (modbus_profile(c, a, &m.prof))
+		return -1;
 	for (; a[0]; a += 2) {
-		int r = -1;
-		for (int i = 0; i < BK_REG_COUNT; i++)
-			if (!strcmp(a[0], reg_names[i]))
-				r = i;
-		if (r >= 0) {
-			if (get_uint(c, "modbus", a[0], a[1], 0, 65535, &m.reg[r]))
-				return -1;
-			have_reg[r] = true;
-		} else if (!strcmp(a[0], "bus")) {
+		bool hit = false;
+		if (modbus_prof_attr(c, a, &m, given, &hit))
+			return -1;
+		if (hit || !strcmp(a[0], "profile"))
+			continue;
+		if (!strcmp(a[0], "bus")) {
 			if (get_uint(c, "modbus", "bus", a[1], 0, BK_MODBUS_BUSES - 1, &bus))
 				return -1;
 		} else if (!strcmp(a[0], "device")) {
@@ -185,9 +245,21 @@ static int modbus_elem(bctx_t *c, const char **a)
 		} else if (!strcmp(a[0], "timeout_ms")) {
 			if (get_uint(c, "modbus", "timeout_ms", a[1], 1, 1000, &m.timeout_ms))
 				return -1;
+		} else if (!strcmp(a[0], "byte_timeout_ms")) {
+			if (get_uint(c, "modbus", "byte_timeout_ms", a[1], 1, 1000,
+				     &m.byte_timeout_ms))
+				return -1;
 		} else if (!strcmp(a[0], "retries")) {
 			if (get_uint(c, "modbus", "retries", a[1], 0, 10, &m.retries))
 				return -1;
+		} else if (!strcmp(a[0], "comm_timeout_ms")) {
+			if (get_uint(c, "modbus", "comm_timeout_ms", a[1], 10, 60000,
+				     &m.comm_timeout_ms))
+				return -1;
+		} else if (!strcmp(a[0], "comm_stop")) {
+			if (strcmp(a[1], "none") != 0 && strcmp(a[1], "drive") != 0)
+				return fail(c, "modbus.comm_stop: drive or none '%s'", a[1]);
+			m.comm_stop_none = a[1][0] == 'n';
 		} else {
 			return fail(c, "modbus.%s: unknown attribute", a[0]);
 		}
@@ -196,13 +268,19 @@ static int modbus_elem(bctx_t *c, const char **a)
 		return fail(c, "modbus.bus: required");
 	if (!m.device[0])
 		return fail(c, "modbus.device: required");
-	for (int i = 0; i < BK_REG_COUNT; i++)
-		if (!have_reg[i])
-			return fail(c, "modbus.%s: required", reg_names[i]);
+	/* The generic profile has no addresses of its own. */
+	if (!strcmp(m.prof.name, "generic"))
+		for (int i = 0; i < MBP_COMM_TIMEOUT; i++)
+			if (!given[i])
+				return fail(c, "modbus.%s: required", reg_names[i]);
+	const char *why = mbp_check(&m.prof);
+	if (why)
+		return fail(c, "modbus.profile: %s '%s'", why, m.prof.name);
 	if (c->b->bus[bus].used)
 		return fail(c, "modbus.bus: duplicate '%u'", bus);
 	m.used = true;
 	c->b->bus[bus] = m;
+	c->modbus_line[bus] = c->line;
 	return 0;
 }
 
@@ -488,6 +566,37 @@ static int backends_start(void *ctx, config_reader_t *r, const char *name, const
 	return fail(c, "%s: unknown element", name);
 }
 
+/* A Modbus drive against its bus: the bus exists, the channel is one of
+ * its profile's, unit and channel are its own, and the bus says how its
+ * drives stop when the bus falls silent. */
+static int modbus_drive_check(bctx_t *c, unsigned i)
+{
+	const backend_cfg_t *b = c->b;
+	const bk_modbus_bus_t *m = &b->bus[b->drive_bus[i]];
+	c->at_line = c->drive_line[i];
+	if (!m->used)
+		return fail(c, "drive.bus: no <modbus bus=\"%u\"> for axis %u", b->drive_bus[i], i);
+	if (b->drive_channel[i] >= m->prof.channels)
+		return fail(c, "drive.channel: profile %s has %u channel%s '%u'", m->prof.name,
+			    m->prof.channels, m->prof.channels > 1 ? "s" : "", b->drive_channel[i]);
+	for (unsigned j = 0; j < i; j++)
+		if (b->drive_type[j] == BK_DRIVE_MODBUS && b->drive_bus[j] == b->drive_bus[i] &&
+		    b->drive_unit[j] == b->drive_unit[i] &&
+		    b->drive_channel[j] == b->drive_channel[i])
+			return fail(
+			    c, "drive.unit: also axis %u's unit and channel on modbus bus %u '%u'",
+			    j, b->drive_bus[i], b->drive_unit[i]);
+	if (m->prof.reg[MBP_COMM_TIMEOUT].words == 0 && !m->comm_stop_none) {
+		c->at_line = c->modbus_line[b->drive_bus[i]];
+		return fail(c,
+			    "modbus.comm_stop: profile %s has no comm_timeout register: give "
+			    "reg_comm_timeout, or comm_stop=\"none\" for drives that run on when "
+			    "the bus falls silent '%s'",
+			    m->prof.name, "drive");
+	}
+	return 0;
+}
+
 /* Cross-references, once every element is known. */
 static int backends_finish(void *ctx, config_reader_t *r)
 {
@@ -495,11 +604,8 @@ static int backends_finish(void *ctx, config_reader_t *r)
 	const backend_cfg_t *b = c->b;
 	c->r = r;
 	for (unsigned i = 0; i < VS_MAX_AXES; i++)
-		if (b->drive_type[i] == BK_DRIVE_MODBUS && !b->bus[b->drive_bus[i]].used) {
-			c->at_line = c->drive_line[i];
-			return fail(c, "drive.bus: no <modbus bus=\"%u\"> for axis %u",
-				    b->drive_bus[i], i);
-		}
+		if (b->drive_type[i] == BK_DRIVE_MODBUS && modbus_drive_check(c, i))
+			return -1;
 	if (b->battery_source == BK_BATTERY_MODBUS && !b->bus[b->battery_mb.bus].used) {
 		c->at_line = c->battery_line;
 		return fail(c, "battery.bus: no <modbus bus=\"%u\"> for the battery",

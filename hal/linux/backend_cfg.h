@@ -15,7 +15,10 @@
  *                profile_accel="100000" fault_reset_ms="200"/>
  *       <modbus bus="0" device="/dev/ttyUSB0" baud="115200" parity="N" stop_bits="1"
  *               timeout_ms="20" retries="1" reg_target_speed="0" reg_position="2"
- *               reg_status="4" reg_alarm="5" reg_servo_on="6" reg_fault_reset="7"/>
+ *               reg_status="4" reg_alarm="5" reg_servo_on="6" reg_fault_reset="7"
+ *               reg_comm_timeout="9" comm_timeout_ms="200"/>
+ *       <modbus bus="1" device="/dev/ttyUSB1" profile="zlac8015d" speed_scale="4096/60"/>
+ *       <drive axis="0" type="modbus" bus="1" unit="1" channel="0"/>
  *       <power settle_ms="20"/>                relay settle time, 0..50
  *       <battery source="fixed" mv="24000"/>   source: fixed | iio (path, scale) | modbus
  *       <battery source="modbus" bus="0" unit="10" reg="512" reg_type="input" width="16"
@@ -33,8 +36,20 @@
  * relay_feedback a relay line's feedback is its commanded state.
  *
  * modbus drive: Modbus RTU over libmodbus, one thread per bus (hal/linux/
- * modbus_drive.h for the register semantics). Every reg_* is required;
- * addresses 0..65535, holding registers.
+ * modbus_drive.h for the semantics). profile: a built-in drive profile
+ * (hal/modbus/mbprofile.h: generic, the default, or zlac8015d); any of its
+ * fields may be given as an attribute in the profile's text form (speed,
+ * position, ..., speed_scale, status_mask, enable_on, ...). The generic
+ * profile takes its addresses from reg_target_speed, reg_position,
+ * reg_status, reg_alarm, reg_servo_on, reg_fault_reset (each required
+ * unless its register is given in text form) and reg_comm_timeout
+ * (optional). comm_timeout_ms 10..60000 (default 200) is written to the
+ * drives' comm_timeout register at start; a profile without one needs
+ * comm_stop="none", which says the drives keep their last speed when the
+ * bus falls silent. byte_timeout_ms 1..1000: the longest gap inside a
+ * reply (default: 4 characters at the baud rate, at least 5 ms). drive
+ * channel: the motor of a multi-channel unit (0..channels-1, default 0);
+ * unit and channel once per bus.
  *
  * modbus battery: bus (a <modbus> element, which still needs its reg_*),
  * unit, reg required; reg_type holding (default) | input; width 16
@@ -77,21 +92,12 @@
 #include <stdint.h>
 
 #include "../../firmware/config.h"
+#include "../modbus/mbprofile.h"
 #include "../posix/config_xml.h"
 
 enum { BK_DRIVE_LOOPBACK = 0, BK_DRIVE_MODBUS = 1, BK_DRIVE_CIA402 = 2 };
 #define BK_MODBUS_BUSES	 2
 #define BK_CANOPEN_BUSES 2 /* as many as Modbus buses: one drive.bus range */
-
-enum {
-	BK_REG_TARGET_SPEED = 0, /* int32, 2 registers, high word first: counts/s */
-	BK_REG_POSITION,	 /* int32, 2 registers: counts */
-	BK_REG_STATUS,		 /* bit 0: power stage enabled */
-	BK_REG_ALARM,		 /* the drive's alarm code, 0: none */
-	BK_REG_SERVO_ON,	 /* written 1/0 */
-	BK_REG_FAULT_RESET,	 /* written 1 to reset a fault */
-	BK_REG_COUNT,
-};
 
 typedef struct {
 	bool used;
@@ -99,9 +105,12 @@ typedef struct {
 	uint32_t baud;
 	char parity; /* 'N', 'E', 'O' */
 	uint32_t stop_bits;
-	uint32_t timeout_ms; /* per request */
-	uint32_t retries;    /* further attempts after the first */
-	uint32_t reg[BK_REG_COUNT];
+	uint32_t timeout_ms;	  /* per request: the wait for a reply's first byte */
+	uint32_t byte_timeout_ms; /* between two bytes of a reply; 0: from the baud rate */
+	uint32_t retries;	  /* further attempts after the first */
+	mb_profile_t prof;	  /* the drives' registers (generic unless named) */
+	uint32_t comm_timeout_ms; /* written to the drives' comm_timeout register */
+	bool comm_stop_none;	  /* comm_stop="none": the drives have no such stop */
 } bk_modbus_bus_t;
 
 typedef struct {
@@ -157,9 +166,10 @@ typedef struct {
 
 typedef struct {
 	uint8_t drive_type[VS_MAX_AXES];
-	uint8_t drive_bus[VS_MAX_AXES];	 /* modbus, cia402: bus index */
-	uint8_t drive_unit[VS_MAX_AXES]; /* modbus: unit id 1..247 */
-	uint8_t drive_node[VS_MAX_AXES]; /* cia402: node id 1..127 */
+	uint8_t drive_bus[VS_MAX_AXES];	    /* modbus, cia402: bus index */
+	uint8_t drive_unit[VS_MAX_AXES];    /* modbus: unit id 1..247 */
+	uint8_t drive_channel[VS_MAX_AXES]; /* modbus: motor of a multi-channel unit */
+	uint8_t drive_node[VS_MAX_AXES];    /* cia402: node id 1..127 */
 	/* modbus, cia402: the motor is mounted mirrored; the master negates
 	 * setpoint and position (the drive's own polarity is left alone) */
 	bool drive_reverse[VS_MAX_AXES];

@@ -56,8 +56,9 @@ int lhal_open(lhal_t *h, const backend_cfg_t *bk, const hal_io_map_t *io, uint8_
 			goto fail;
 		for (uint8_t i = 0; i < naxes; i++)
 			if (bk->drive_type[i] == BK_DRIVE_MODBUS && bk->drive_bus[i] == n)
-				h->mb_index[i] = (uint8_t)mb_bus_add(&h->bus[n], bk->drive_unit[i],
-								     bk->drive_reverse[i]);
+				h->mb_index[i] =
+				    (uint8_t)mb_bus_add(&h->bus[n], bk->drive_unit[i],
+							bk->drive_channel[i], bk->drive_reverse[i]);
 		if (battery)
 			mb_bus_add_battery(&h->bus[n], &bk->battery_mb, bk->battery_scale);
 		/* Started before the caller turns to SCHED_FIFO: the bus threads
@@ -110,6 +111,22 @@ void lhal_close(lhal_t *h)
 		co_bus_close(&h->can[n]);
 	ljoy_close(&h->joy);
 	lgpio_close(&h->gpio);
+}
+
+size_t lhal_modbus_counters(lhal_t *h, char *buf, size_t cap)
+{
+	size_t n = 0;
+	for (unsigned b = 0; b < BK_MODBUS_BUSES; b++) {
+		if (!h->bus[b].ctx || n + 2 >= cap)
+			continue;
+		buf[n++] = ' ';
+		int k = mb_bus_counters(&h->bus[b], b, buf + n, cap - n);
+		n += k > 0 ? (size_t)k : 0;
+		n = n < cap ? n : cap - 1;
+	}
+	if (cap)
+		buf[n < cap ? n : cap - 1] = '\0';
+	return n;
 }
 
 static mb_bus_t *mb_of(lhal_t *h, uint8_t axis)

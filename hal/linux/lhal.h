@@ -50,6 +50,9 @@ extern const vs_hal_ops_t lhal_ops;
 int lhal_open(lhal_t *h, const backend_cfg_t *bk, const hal_io_map_t *io, uint8_t naxes, char *err,
 	      size_t errlen);
 void lhal_close(lhal_t *h);
+/* The counters of each Modbus bus (mb_bus_counters), each after a space;
+ * the length written. */
+size_t lhal_modbus_counters(lhal_t *h, char *buf, size_t cap);
 void lhal_pre_tick(lhal_t *h, uint32_t now_us);
 
 #endif

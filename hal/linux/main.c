@@ -129,6 +129,9 @@ static bool rt_extra(void *ctx, int argc, char **argv, char *reply, size_t cap)
 			co_bus_counters(&a->hal.can[b], reply + n, cap - n);
 		}
 	}
+	/* and of each Modbus bus */
+	size_t n = strlen(reply);
+	lhal_modbus_counters(&a->hal, reply + n, cap - n);
 	return true;
 }
 
@@ -441,6 +444,9 @@ static void log_exit(app_t *a, const backend_cfg_t *bk)
 			co_bus_counters(&a->hal.can[b], c, sizeof(c));
 			rt_log(LOG_INFO, "exit: %s", c);
 		}
+	char m[1024];
+	if (lhal_modbus_counters(&a->hal, m, sizeof(m)) > 0)
+		rt_log(LOG_INFO, "exit:%s", m);
 	if (a->srv.can) {
 		size_t n;
 		server_can_counters(&a->srv, c, sizeof(c));

@@ -7,10 +7,11 @@
 #include <string.h>
 #include <time.h>
 
+#include "../modbus/mbprofile.h"
 #include "../posix/rt.h"
 
 #define CYCLE_PAUSE_NS 1000000L /* between cycles: leaves the line idle briefly */
-#define BLOCK_MAX      8
+#define BLOCK_MAX      32
 #define PROBE_US       200000u
 
 static uint64_t mono_us(void)
@@ -18,6 +19,15 @@ static uint64_t mono_us(void)
 	struct timespec t;
 	clock_gettime(CLOCK_MONOTONIC, &t);
 	return (uint64_t)t.tv_sec * 1000000u + (uint64_t)t.tv_nsec / 1000u;
+}
+
+uint32_t mb_byte_timeout_us(uint32_t baud, char parity, uint32_t stop_bits)
+{
+	uint32_t bits = 1 + 8 + (parity == 'N' ? 0 : 1) + stop_bits;
+	uint32_t us = (uint32_t)(4ull * bits * 1000000u / (baud ? baud : 1));
+	/* A host's serial driver and a USB adapter deliver a reply in pieces
+	 * some milliseconds apart: below that a good reply would be cut. */
+	return us < 5000u ? 5000u : us;
 }
 
 int mb_bus_open(mb_bus_t *b, const bk_modbus_bus_t *cfg, char *err, size_t errlen)
@@ -36,6 +46,10 @@ int mb_bus_open(mb_bus_t *b, const bk_modbus_bus_t *cfg, char *err, size_t errle
 		return -1;
 	}
 	modbus_set_response_timeout(m, cfg->timeout_ms / 1000u, (cfg->timeout_ms % 1000u) * 1000u);
+	b->byte_timeout_us = cfg->byte_timeout_ms
+				 ? cfg->byte_timeout_ms * 1000u
+				 : mb_byte_timeout_us(cfg->baud, cfg->parity, cfg->stop_bits);
+	modbus_set_byte_timeout(m, b->byte_timeout_us / 1000000u, b->byte_timeout_us % 1000000u);
 	b->ctx = m;
 	pthread_mutexattr_t a;
 	pthread_mutexattr_init(&a);
@@ -45,108 +59,267 @@ int mb_bus_open(mb_bus_t *b, const bk_modbus_bus_t *cfg, char *err, size_t errle
 	return 0;
 }
 
-unsigned mb_bus_add(mb_bus_t *b, uint8_t unit, bool reverse)
+unsigned mb_bus_add(mb_bus_t *b, uint8_t unit, uint8_t ch, bool reverse)
 {
 	mb_drive_t *d = &b->d[b->nd];
 	memset(d, 0, sizeof(*d));
 	d->unit = unit;
+	d->ch = ch;
 	d->reverse = reverse;
 	return b->nd++;
 }
 
 enum { RD_HOLDING, RD_INPUT, WR };
 
-/* One request with retries; false when every attempt failed. */
-static bool xfer_n(mb_bus_t *b, uint8_t unit, int op, int addr, int n, uint16_t *regs,
-		   uint32_t retries)
+/* How a request ended. */
+enum { XF_OK, XF_NO_REPLY, XF_BUSY, XF_MAP, XF_EXCEPTION };
+
+static void count(mb_count_t *c, int e)
+{
+	if (e == ETIMEDOUT)
+		c->timeouts++;
+	else if (e == EMBBADCRC)
+		c->crc_errors++;
+	else if (e >= EMBXILFUN && e <= EMBXGTAR) {
+		c->exceptions++;
+		c->busy += e == EMBXSBUSY;
+		c->illegal += e == EMBXILFUN || e == EMBXILADD;
+	} else {
+		c->bad++;
+	}
+}
+
+static int classify(int e)
+{
+	if (e == EMBXSBUSY)
+		return XF_BUSY;
+	if (e == EMBXILFUN || e == EMBXILADD)
+		return XF_MAP;
+	if (e >= EMBXILFUN && e <= EMBXGTAR)
+		return XF_EXCEPTION;
+	return XF_NO_REPLY;
+}
+
+static const char *op_name(int op, int n)
+{
+	return op == WR		? (n == 1 ? "06 (write register)" : "16 (write registers)")
+	       : op == RD_INPUT ? "04 (read input registers)"
+				: "03 (read holding registers)";
+}
+
+/* One request with retries; XF_OK or how the last attempt failed. An
+ * illegal function or address is not retried: the answer will not
+ * change. */
+static int xfer_n(mb_bus_t *b, uint8_t unit, int op, int addr, int n, uint16_t *regs,
+		  uint32_t retries)
 {
 	modbus_t *m = b->ctx;
+	int res = XF_NO_REPLY;
 	modbus_set_slave(m, unit);
 	for (uint32_t attempt = 0; attempt <= retries; attempt++) {
 		int r = op == WR	 ? (n == 1 ? modbus_write_register(m, addr, regs[0])
 						   : modbus_write_registers(m, addr, n, regs))
 			: op == RD_INPUT ? modbus_read_input_registers(m, addr, n, regs)
 					 : modbus_read_registers(m, addr, n, regs);
+		int e = r == n ? 0 : errno;
 		pthread_mutex_lock(&b->mu);
 		b->requests++;
 		if (attempt)
 			b->retries++;
-		if (r != n)
+		if (r != n) {
 			b->errors++;
+			count(&b->cnt, e);
+			if (b->cur)
+				count(&b->cur->cnt, e);
+		}
 		pthread_mutex_unlock(&b->mu);
 		if (r == n)
-			return true;
-		modbus_flush(m); /* a late answer must not pair with the next request */
+			return XF_OK;
+		res = classify(e);
+		if (res == XF_MAP && b->cur && !b->cur->map_logged) {
+			b->cur->map_logged = true;
+			rt_log(LOG_ERR,
+			       "modbus bus %s: unit %u: function %s at 0x%04X (%d register%s): %s: "
+			       "the drive profile '%s' does not match the drive",
+			       b->cfg.device, unit, op_name(op, n), (unsigned)addr, n,
+			       n > 1 ? "s" : "", modbus_strerror(e), b->cfg.prof.name);
+		}
+		if (res == XF_MAP)
+			return res;
+		if (res == XF_NO_REPLY)
+			modbus_flush(m); /* a late answer must not pair with the next request */
 	}
-	return false;
+	return res;
 }
 
-static bool xfer(mb_bus_t *b, uint8_t unit, int op, int addr, int n, uint16_t *regs)
+static int xfer(mb_bus_t *b, uint8_t unit, int op, int addr, int n, uint16_t *regs)
 {
 	return xfer_n(b, unit, op, addr, n, regs, b->cur_retries);
 }
 
-static void cycle_drive(mb_bus_t *b, mb_drive_t *d)
+/* Writes one register (or a pair) of drive d. */
+static int write_reg(mb_bus_t *b, const mb_drive_t *d, unsigned r, uint16_t *w)
 {
-	const uint32_t *reg = b->cfg.reg;
-	uint64_t now = mono_us();
-	if (d->silent && now < d->next_probe_us)
-		return;
-	/* A silent drive gets one attempt per probe. */
-	b->cur_retries = d->silent ? 0 : b->cfg.retries;
+	const mbp_reg_t *g = &b->cfg.prof.reg[r];
+	return xfer(b, d->unit, WR, mbp_addr(g, d->ch), g->words, w);
+}
+
+/* The profile's init registers and the drive's own communication-loss
+ * stop (unless the bus has none). */
+static int setup_drive(mb_bus_t *b, const mb_drive_t *d)
+{
+	const mb_profile_t *p = &b->cfg.prof;
+	for (unsigned i = 0; i < p->ninit; i++) {
+		uint16_t v = p->init[i].value;
+		int x = xfer(b, d->unit, WR, p->init[i].addr, 1, &v);
+		if (x != XF_OK)
+			return x;
+	}
+	if (b->cfg.comm_stop_none || p->reg[MBP_COMM_TIMEOUT].words == 0)
+		return XF_OK;
+	uint32_t units = (b->cfg.comm_timeout_ms + p->comm_unit_ms - 1u) / p->comm_unit_ms;
+	uint16_t w[2];
+	mbp_put(&p->reg[MBP_COMM_TIMEOUT], (int32_t)(units > 65535u ? 65535u : units), w);
+	return write_reg(b, d, MBP_COMM_TIMEOUT, w);
+}
+
+/* The enable value for drive d: a register shared by the unit's channels
+ * is on only while every drive of the unit is commanded on. Under mu. */
+static bool enable_wanted(const mb_bus_t *b, const mb_drive_t *d)
+{
+	if (b->cfg.prof.reg[MBP_ENABLE].step != 0)
+		return d->cmd_enable;
+	for (unsigned i = 0; i < b->nd; i++)
+		if (b->d[i].unit == d->unit && !b->d[i].cmd_enable)
+			return false;
+	return true;
+}
+
+typedef struct {
+	uint8_t r;
+	uint8_t n;
+	bool input;
+	uint16_t addr;
+} rd_item_t;
+
+/* Position, status and alarm of drive d, in as few reads as the profile's
+ * block allows (reads never mix holding and input registers). */
+static int read_sample(mb_bus_t *b, const mb_drive_t *d, int32_t *pos, uint16_t *st, uint16_t *al)
+{
+	const mb_profile_t *p = &b->cfg.prof;
+	rd_item_t it[3] = {{0, 0, false, 0}};
+	unsigned n = 0;
+	static const uint8_t regs[3] = {MBP_POSITION, MBP_STATUS, MBP_ALARM};
+	for (unsigned k = 0; k < 3; k++) {
+		const mbp_reg_t *g = &p->reg[regs[k]];
+		if (!g->words)
+			continue;
+		rd_item_t x = {regs[k], g->words, (g->flags & MBP_INPUT) != 0, mbp_addr(g, d->ch)};
+		unsigned j = n++;
+		/* sorted by (area, address) */
+		while (j > 0 && (it[j - 1].input > x.input ||
+				 (it[j - 1].input == x.input && it[j - 1].addr > x.addr))) {
+			it[j] = it[j - 1];
+			j--;
+		}
+		it[j] = x;
+	}
+	uint16_t val[MBP_REG_COUNT][2] = {{0}};
+	for (unsigned i = 0; i < n;) {
+		unsigned j = i, end = it[i].addr + it[i].n;
+		while (j + 1 < n && it[j + 1].input == it[i].input &&
+		       it[j + 1].addr + it[j + 1].n - it[i].addr <= p->block) {
+			j++;
+			end = it[j].addr + it[j].n > end ? it[j].addr + it[j].n : end;
+		}
+		uint16_t blk[BLOCK_MAX];
+		int x = xfer(b, d->unit, it[i].input ? RD_INPUT : RD_HOLDING, it[i].addr,
+			     (int)(end - it[i].addr), blk);
+		if (x != XF_OK)
+			return x;
+		for (unsigned k = i; k <= j; k++)
+			for (unsigned w = 0; w < it[k].n; w++)
+				val[it[k].r][w] = blk[it[k].addr - it[i].addr + w];
+		i = j + 1;
+	}
+	*pos = mbp_get(&p->reg[MBP_POSITION], val[MBP_POSITION]);
+	*st = val[MBP_STATUS][0];
+	*al = (uint16_t)mbp_get(&p->reg[MBP_ALARM], val[MBP_ALARM]);
+	return XF_OK;
+}
+
+/* The cycle's requests up to the sample; XF_OK or how it failed. */
+static int cycle_requests(mb_bus_t *b, mb_drive_t *d, int32_t *pos, uint16_t *st, uint16_t *al)
+{
+	const mb_profile_t *p = &b->cfg.prof;
 	int32_t cps;
 	bool en;
 	uint32_t reset;
 	pthread_mutex_lock(&b->mu);
 	/* a speed only to a stage that is on: it starts from 0, not a step */
-	cps = d->cmd_enable && (d->status & 1u) ? d->cmd_cps : 0;
-	en = d->cmd_enable;
+	cps = d->cmd_enable && mbp_enabled(p, d->status) ? d->cmd_cps : 0;
+	en = enable_wanted(b, d);
 	reset = d->reset_req;
 	pthread_mutex_unlock(&b->mu);
 
-	if (reset != d->reset_done) {
-		uint16_t one = 1;
-		if (xfer(b, d->unit, WR, (int)reg[BK_REG_FAULT_RESET], 1, &one))
+	int x = XF_OK;
+	if (!d->setup_done) {
+		x = setup_drive(b, d);
+		if (x != XF_OK)
+			return x;
+		d->setup_done = true;
+	}
+	if (reset != d->reset_done && p->reg[MBP_RESET].words) {
+		uint16_t w[2];
+		mbp_put(&p->reg[MBP_RESET], p->reset_value, w);
+		if (write_reg(b, d, MBP_RESET, w) == XF_OK)
 			d->reset_done = reset;
 	}
 	if (!d->enable_sent_ok || d->enable_sent != en) {
-		uint16_t v = en ? 1 : 0;
+		uint16_t w[2];
+		mbp_put(&p->reg[MBP_ENABLE], en ? p->enable_on : p->enable_off, w);
 		d->enable_sent = en;
-		d->enable_sent_ok = xfer(b, d->unit, WR, (int)reg[BK_REG_SERVO_ON], 1, &v);
+		d->enable_sent_ok = write_reg(b, d, MBP_ENABLE, w) == XF_OK;
 	}
-	uint16_t sp[2] = {(uint16_t)((uint32_t)cps >> 16), (uint16_t)((uint32_t)cps & 0xffffu)};
-	bool ok = xfer(b, d->unit, WR, (int)reg[BK_REG_TARGET_SPEED], 2, sp);
+	uint16_t sp[2];
+	mbp_speed_words(p, cps, sp);
+	x = write_reg(b, d, MBP_SPEED, sp);
+	return x != XF_OK ? x : read_sample(b, d, pos, st, al);
+}
 
-	uint32_t lo = reg[BK_REG_POSITION], hi = reg[BK_REG_POSITION] + 1;
-	for (int r = BK_REG_STATUS; r <= BK_REG_ALARM; r++) {
-		lo = reg[r] < lo ? reg[r] : lo;
-		hi = reg[r] > hi ? reg[r] : hi;
-	}
-	uint16_t pos[2] = {0, 0}, st = 0, al = 0;
-	if (ok && hi - lo < BLOCK_MAX) {
-		uint16_t blk[BLOCK_MAX];
-		ok = xfer(b, d->unit, RD_HOLDING, (int)lo, (int)(hi - lo + 1), blk);
-		pos[0] = blk[reg[BK_REG_POSITION] - lo];
-		pos[1] = blk[reg[BK_REG_POSITION] + 1 - lo];
-		st = blk[reg[BK_REG_STATUS] - lo];
-		al = blk[reg[BK_REG_ALARM] - lo];
-	} else if (ok) {
-		ok = xfer(b, d->unit, RD_HOLDING, (int)reg[BK_REG_POSITION], 2, pos) &&
-		     xfer(b, d->unit, RD_HOLDING, (int)reg[BK_REG_STATUS], 1, &st) &&
-		     xfer(b, d->unit, RD_HOLDING, (int)reg[BK_REG_ALARM], 1, &al);
-	}
+static void cycle_drive(mb_bus_t *b, mb_drive_t *d)
+{
+	uint64_t now = mono_us();
+	if (d->silent && now < d->next_probe_us)
+		return;
+	/* A silent drive gets one attempt per probe. */
+	b->cur_retries = d->silent ? 0 : b->cfg.retries;
+	b->cur = d;
+	int32_t pos = 0;
+	uint16_t st = 0, al = 0;
+	int x = cycle_requests(b, d, &pos, &st, &al);
+	b->cur = NULL;
 	pthread_mutex_lock(&b->mu);
-	if (ok) {
-		d->pos = (int32_t)(((uint32_t)pos[0] << 16) | pos[1]);
+	if (x == XF_OK) {
+		d->pos = pos;
 		d->status = st;
 		d->alarm = al;
 		d->fresh = true;
 		d->sampled = true;
 		d->silent = false;
+		d->map_logged = false;
 	} else {
 		d->failures++;
-		d->silent = true;
-		d->next_probe_us = mono_us() + PROBE_US;
+		/* A drive that answers (busy, an exception) is asked again in
+		 * the next cycle: it costs the bus little. */
+		d->why = x == XF_BUSY  ? HAL_SILENT_BUSY
+			 : x == XF_MAP ? HAL_SILENT_MAP
+				       : HAL_SILENT_NO_REPLY;
+		if (x == XF_NO_REPLY) {
+			d->silent = true;
+			d->setup_done = false; /* it may have restarted: set it up again */
+			d->next_probe_us = mono_us() + PROBE_US;
+		}
 	}
 	pthread_mutex_unlock(&b->mu);
 }
@@ -174,7 +347,7 @@ static void cycle_battery(mb_bus_t *b)
 		b->cur_retries = t->failing ? 0 : b->cfg.retries;
 		uint16_t r[2] = {0, 0};
 		bool ok = xfer(b, t->cfg.unit, t->cfg.input ? RD_INPUT : RD_HOLDING, t->cfg.reg,
-			       t->cfg.words, r);
+			       t->cfg.words, r) == XF_OK;
 		uint32_t raw = t->cfg.words == 2 ? ((uint32_t)r[0] << 16) | r[1] : r[0];
 		double v = (double)raw * t->scale + 0.5;
 		ok = ok && v < 4e9; /* beyond uint32 mV: a wrong register, not a voltage */
@@ -225,6 +398,26 @@ void mb_bus_add_battery(mb_bus_t *b, const bk_battery_modbus_t *cfg, double scal
 
 int mb_bus_start(mb_bus_t *b, char *err, size_t errlen)
 {
+	b->cur_retries = b->cfg.retries;
+	for (unsigned i = 0; i < b->nd; i++) {
+		mb_drive_t *d = &b->d[i];
+		if (d->setup_done)
+			continue;
+		b->cur = d;
+		int x = setup_drive(b, d);
+		b->cur = NULL;
+		if (x != XF_OK) {
+			snprintf(err, errlen,
+				 "modbus bus %s: unit %u: the profile's start-up registers (%s, "
+				 "comm_timeout) were not written: %s",
+				 b->cfg.device, d->unit, b->cfg.prof.name,
+				 x == XF_MAP	? "the drive has no such register"
+				 : x == XF_BUSY ? "the drive answers busy"
+						: "no reply");
+			return -1;
+		}
+		d->setup_done = true;
+	}
 	/* The stale bound counts from start: a battery that never answers
 	 * reads 0 V after it, like one that stopped answering. */
 	b->bat.good_us = mono_us();
@@ -248,10 +441,13 @@ void mb_bus_close(mb_bus_t *b)
 		b->running = false;
 	}
 	b->cur_retries = b->cfg.retries;
+	const mb_profile_t *p = &b->cfg.prof;
 	for (unsigned i = 0; i < b->nd; i++) {
-		uint16_t zero[2] = {0, 0};
-		xfer(b, b->d[i].unit, WR, (int)b->cfg.reg[BK_REG_TARGET_SPEED], 2, zero);
-		xfer(b, b->d[i].unit, WR, (int)b->cfg.reg[BK_REG_SERVO_ON], 1, zero);
+		uint16_t w[2];
+		mbp_speed_words(p, 0, w);
+		write_reg(b, &b->d[i], MBP_SPEED, w);
+		mbp_put(&p->reg[MBP_ENABLE], p->enable_off, w);
+		write_reg(b, &b->d[i], MBP_ENABLE, w);
 	}
 	modbus_close(b->ctx);
 	modbus_free(b->ctx);
@@ -314,13 +510,41 @@ void mb_drive_read(mb_bus_t *b, unsigned i, hal_drive_state_t *st)
 	pthread_mutex_lock(&b->mu);
 	st->position_counts = d->reverse ? (int32_t)(0u - (uint32_t)d->pos) : d->pos;
 	st->fault_code = d->alarm;
-	st->enabled = (d->status & 1u) != 0;
+	st->enabled = mbp_enabled(&b->cfg.prof, d->status);
 	st->phase = !d->sampled	  ? HAL_DRIVE_UNKNOWN
 		    : d->alarm	  ? HAL_DRIVE_FAULT
 		    : st->enabled ? HAL_DRIVE_ENABLED
 				  : HAL_DRIVE_READY;
 	st->position_lost = false;
 	st->fresh = d->fresh;
+	st->silent_why = d->fresh ? HAL_SILENT_NO_REPLY : d->why;
 	d->fresh = false;
 	pthread_mutex_unlock(&b->mu);
+}
+
+static int put_count(char *buf, size_t len, const mb_count_t *c)
+{
+	return snprintf(buf, len,
+			"timeouts %u crc_errors %u bad_replies %u exceptions %u busy %u illegal %u",
+			c->timeouts, c->crc_errors, c->bad, c->exceptions, c->busy, c->illegal);
+}
+
+int mb_bus_counters(mb_bus_t *b, unsigned n, char *buf, size_t len)
+{
+	pthread_mutex_lock(&b->mu);
+	size_t k = (size_t)snprintf(buf, len, "modbus%u %s requests %u retries %u ", n,
+				    b->cfg.device, b->requests, b->retries);
+	if (k < len)
+		k += (size_t)put_count(buf + k, len - k, &b->cnt);
+	for (unsigned i = 0; i < b->nd && k < len; i++) {
+		const mb_drive_t *d = &b->d[i];
+		if (b->cfg.prof.channels > 1)
+			k += (size_t)snprintf(buf + k, len - k, " unit%u.%u ", d->unit, d->ch);
+		else
+			k += (size_t)snprintf(buf + k, len - k, " unit%u ", d->unit);
+		if (k < len)
+			k += (size_t)put_count(buf + k, len - k, &d->cnt);
+	}
+	pthread_mutex_unlock(&b->mu);
+	return (int)k;
 }

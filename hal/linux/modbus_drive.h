@@ -2,27 +2,47 @@
  *
  * The tick never touches the serial line: it posts setpoints and takes the
  * latest sample under a short priority-inheriting mutex. The bus thread
- * cycles over its drives: fault reset when requested, servo_on when it
+ * cycles over its drives: fault reset when requested, enable when it
  * changes, target speed (every cycle), then position, status and alarm
- * code (one read when they lie within 8 registers). Each request has its own
- * response timeout and retries. A drive whose reads fail stops producing
- * fresh samples: the firmware's drive timeout supervision raises the fault
- * and stops the unit. A drive that failed is then only probed every 200 ms
- * (one attempt), so that it does not hold up the others on the bus.
+ * code (one read where the profile's block allows). The registers, their
+ * form and the values written are the bus's drive profile
+ * (hal/modbus/mbprofile.h); a unit id may carry several drives (channels).
  *
- * Registers (holding, backend_cfg.h): target speed counts/s and position
- * counts as int32 in two registers, high word first; status bit 0 = power
- * stage enabled; alarm = the drive's code (0 none). The target speed
- * written is 0 unless servo on is commanded and the last status read says
- * the stage is on (no step when it comes on).
+ * Timing: each request waits timeout_ms for the reply's first byte, then at
+ * most the byte timeout between two bytes (byte_timeout_ms, or 4 character
+ * times at the baud rate, at least 5 ms): a drive that stops mid-reply
+ * costs that, not libmodbus's default 500 ms.
  *
- * Reported state: enabled is status bit 0 as last read, never the servo on
- * command; phase HAL_DRIVE_FAULT while the alarm register is non-zero,
- * else HAL_DRIVE_ENABLED with bit 0, else HAL_DRIVE_READY (the registers
- * tell no more), HAL_DRIVE_UNKNOWN before the first read. These registers
- * give no sign of a drive that restarted: position_lost is never set (a
- * restarted drive's count jumps to its new position register). Polarity
- * reverse: the speed written and the position read are negated here.
+ * Failures, by what came back:
+ *  - nothing, a bad CRC, a malformed reply: retried (retries); a drive
+ *    whose cycle fails so is then only probed every 200 ms (one attempt),
+ *    so that it does not hold up the others; the firmware's drive timeout
+ *    raises 202 "not answering".
+ *  - exception 6 (busy): retried, and the next cycle tries again at once;
+ *    still only busy after the drive timeout: 202 "not answering: busy".
+ *  - exception 1 or 2 (illegal function or address): not retried, the
+ *    register map does not match the drive; logged once with the function
+ *    and register; after the drive timeout the firmware's 213.
+ * Every request, retry, timeout, CRC error and exception is counted per
+ * bus, and per drive (mb_bus_counters: `$rt`, the exit log).
+ *
+ * Start-up (mb_bus_start, before the loop): per drive the profile's init
+ * registers and its comm_timeout register (the drive's own stop when its
+ * master falls silent), unless the bus says comm_stop="none"; a drive that
+ * refuses them ends the start with a message. They are written again when
+ * a silent drive answers again (a drive that restarted forgot them).
+ *
+ * Reported state: enabled is the status register under the profile's mask
+ * as last read, never the enable command; phase HAL_DRIVE_FAULT while the
+ * alarm register is non-zero, else HAL_DRIVE_ENABLED when enabled, else
+ * HAL_DRIVE_READY (the registers tell no more), HAL_DRIVE_UNKNOWN before
+ * the first read. These registers give no sign of a drive that restarted:
+ * position_lost is never set (a restarted drive's count jumps to its new
+ * position register). Polarity reverse: the speed written and the position
+ * read are negated here. The target speed written is 0 unless the enable is
+ * commanded and the last status read says the stage is on (no step when it
+ * comes on). An enable register shared by a unit's channels is written
+ * enable_on only while every drive of that unit is commanded on.
  *
  * Battery (<battery source="modbus">): after each round of the drives, when
  * its period is due, the bus thread reads the battery register of its unit
@@ -46,8 +66,19 @@
 #include "../hal.h"
 #include "backend_cfg.h"
 
+/* What went wrong on a bus or with one drive (bus thread, read under mu). */
+typedef struct {
+	uint32_t timeouts;   /* no reply, or a reply that stopped */
+	uint32_t crc_errors; /* a reply with a bad CRC */
+	uint32_t bad;	     /* another malformed or unexpected reply */
+	uint32_t exceptions; /* exception replies, every code */
+	uint32_t busy;	     /* of them: 6, busy */
+	uint32_t illegal;    /* of them: 1 or 2, no such function or register */
+} mb_count_t;
+
 typedef struct {
 	uint8_t unit;
+	uint8_t ch;   /* channel of a multi-channel unit */
 	bool reverse; /* polarity reverse: speed and position negated */
 	/* tick -> bus */
 	int32_t cmd_cps;
@@ -58,9 +89,13 @@ typedef struct {
 	uint16_t status, alarm;
 	bool fresh;
 	bool sampled;	   /* one read succeeded since start */
+	uint8_t why;	   /* HAL_SILENT_* of the last failed cycle */
 	uint32_t failures; /* cycles whose reads failed */
+	mb_count_t cnt;
 	/* bus thread only */
-	bool silent; /* last cycle failed: probe only */
+	bool silent; /* last cycle had no reply: probe only */
+	bool setup_done;
+	bool map_logged;
 	uint64_t next_probe_us;
 	bool enable_sent_ok;
 	bool enable_sent;
@@ -93,16 +128,25 @@ typedef struct {
 	unsigned nd;
 	mb_battery_t bat;
 	uint32_t requests, retries, errors; /* under mu */
-	uint32_t cur_retries;		    /* bus thread: retries of this drive */
+	mb_count_t cnt;			    /* under mu */
+	uint32_t byte_timeout_us;
+	uint32_t cur_retries; /* bus thread: retries of this drive */
+	mb_drive_t *cur;      /* bus thread: the drive of this request, or NULL */
 } mb_bus_t;
 
+/* The byte timeout for a baud rate and frame (8 data bits): 4 character
+ * times, at least 5 ms. */
+uint32_t mb_byte_timeout_us(uint32_t baud, char parity, uint32_t stop_bits);
 /* Opens the port (8 data bits). -1 with a message. */
 int mb_bus_open(mb_bus_t *b, const bk_modbus_bus_t *cfg, char *err, size_t errlen);
-/* Before mb_bus_start; returns the drive's index on the bus. reverse:
- * polarity reverse (speed and position negated by the master). */
-unsigned mb_bus_add(mb_bus_t *b, uint8_t unit, bool reverse);
+/* Before mb_bus_start; returns the drive's index on the bus. ch: the
+ * channel of a multi-channel unit; reverse: polarity reverse (speed and
+ * position negated by the master). */
+unsigned mb_bus_add(mb_bus_t *b, uint8_t unit, uint8_t ch, bool reverse);
 /* Before mb_bus_start: this bus also reads the battery. */
 void mb_bus_add_battery(mb_bus_t *b, const bk_battery_modbus_t *cfg, double scale_mv);
+/* Writes each drive's init and comm_timeout registers, then starts the
+ * thread. -1 with a message. */
 int mb_bus_start(mb_bus_t *b, char *err, size_t errlen);
 /* Start-up only (blocks): waits for the battery's first good reading, at
  * most MB_BATTERY_STALE_MS. */
@@ -117,5 +161,10 @@ void mb_drive_read(mb_bus_t *b, unsigned i, hal_drive_state_t *st);
 /* The latest battery value in mV (0: no reading for MB_BATTERY_STALE_MS)
  * and the count of failed reads. */
 uint32_t mb_battery_mv(mb_bus_t *b, uint32_t *errors);
+/* "modbus<n> DEVICE requests N retries N timeouts N crc_errors N
+ * bad_replies N exceptions N busy N illegal N", then per drive " unit<u>
+ * (.<channel> on a multi-channel profile) timeouts N crc_errors N
+ * exceptions N busy N illegal N". */
+int mb_bus_counters(mb_bus_t *b, unsigned n, char *buf, size_t len);
 
 #endif

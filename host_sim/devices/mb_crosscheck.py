@@ -3,6 +3,12 @@
 python3-pymodbus), the client side of the bus that vehicle-fw uses.
 
     mb_crosscheck.py PORT SIM_PID [BATTERY_UNIT BATTERY_MV]
+    mb_crosscheck.py --profile zlac8015d PORT SIM_PID
+
+The first form: the generic profile at the example map (holding 0x100..).
+The second: mbdrive-sim --profile zlac8015d (speed_scale 4096/60), one
+unit (1) with two motors, as the ZLAC8015D's register map has them (the
+addresses below are this script's own, from that map, not vehicle-fw's).
 
 With a battery (mbdrive-sim --battery), also its registers: the voltage in
 10 mV counts at input register 0x200 and holding register 0x108, in mV as
@@ -113,6 +119,68 @@ def main():
     print("crosscheck: PASS")
 
 
+def zlac(port, sim):
+    """The ZLAC8015D's map: control word 0x200E (8 enable, 7 stop, 6 clear
+    fault), r/min as int16 at 0x2088 (left) and 0x2089 (right), position
+    int32 high word first at 0x20A7 and 0x20A9, fault codes 0x20A5 and
+    0x20A6, status 0x20A2 bit 0."""
+    counts_per_rpm = 4096 / 60.0  # the profile's speed_scale: 4096 counts a turn
+    c = ModbusSerialClient(port=port, baudrate=115200, timeout=1)
+    if not c.connect():
+        fail("cannot open " + port)
+
+    def read(addr, n):
+        r = c.read_holding_registers(addr, n, slave=1)
+        if r.isError():
+            fail("read %#x: %s" % (addr, r))
+        return r.registers
+
+    def write(addr, v):
+        r = c.write_register(addr, v & 0xFFFF, slave=1)
+        if r.isError():
+            fail("write %#x: %s" % (addr, r))
+
+    def expect(what, got, want):
+        if got != want:
+            fail("%s: got %r, expected %r" % (what, got, want))
+
+    def positions():
+        r = read(0x20A7, 4)
+        return s32(r[0], r[1]), s32(r[2], r[3])
+
+    expect("positions at start", positions(), (0, 0))
+    expect("status at start", read(0x20A2, 1)[0] & 1, 0)
+    write(0x200E, 0x08)
+    expect("status enabled", read(0x20A2, 1)[0] & 1, 1)
+    # +120 r/min left, -60 r/min right (two's complement in 16 bits)
+    write(0x2088, 120)
+    write(0x2089, -60)
+    t0 = time.monotonic()
+    time.sleep(0.3)
+    left, right = positions()
+    dt = time.monotonic() - t0
+    expect("speed readback", read(0x2088, 2), [120, 0x10000 - 60])
+    if not 120 * counts_per_rpm * (dt - 0.1) < left <= 120 * counts_per_rpm * (dt + 0.01):
+        fail("left position after %.3f s at 120 r/min: %d" % (dt, left))
+    if not -60 * counts_per_rpm * (dt + 0.01) <= right < -60 * counts_per_rpm * (dt - 0.1):
+        fail("right position after %.3f s at -60 r/min: %d" % (dt, right))
+    # the left motor's fault: both stop (one control word); clear fault
+    os.kill(sim, signal.SIGUSR2)
+    time.sleep(0.05)
+    expect("fault codes", read(0x20A5, 2), [0x31, 0])
+    expect("status with a fault", read(0x20A2, 1)[0] & 1, 0)
+    write(0x200E, 0x06)
+    expect("fault codes after clear", read(0x20A5, 2), [0, 0])
+    expect("status after clear (still enabled)", read(0x20A2, 1)[0] & 1, 1)
+    write(0x200E, 0x07)
+    expect("status stopped", read(0x20A2, 1)[0] & 1, 0)
+    p1 = positions()
+    time.sleep(0.1)
+    expect("positions stand when stopped", positions(), p1)
+    c.close()
+    print("crosscheck: PASS")
+
+
 def list_modules():
     """The files of every module a request loads, for a guest without the
     host's Python tree (tests/qemu/fw_process.sh): one read on a pty nobody
@@ -133,5 +201,7 @@ def list_modules():
 
 if sys.argv[1:] == ["--list-modules"]:
     list_modules()
+elif sys.argv[1:3] == ["--profile", "zlac8015d"]:
+    zlac(sys.argv[3], int(sys.argv[4]))
 else:
     main()

@@ -6,6 +6,7 @@
 #
 #   tests/qemu/run_fw.sh [BUILD]     (after make; root on the first run:
 #                                     tools/qemu/setup.sh installs packages)
+#   FW_ONLY=fw_process.sh tests/qemu/run_fw.sh [BUILD]    one script alone
 set -u
 here=$(cd "$(dirname "$0")" && pwd)
 top=$(cd "$here/../.." && pwd)
@@ -43,6 +44,8 @@ process_files() {
 	done
 	echo "$(command -v socat)=/usr/bin/socat"
 	echo "$top/host_sim/devices/mb_crosscheck.py=/g/host_sim/devices/mb_crosscheck.py"
+	echo "$top/config/io.xml=/g/config/io.xml"
+	echo "$top/config/io-modbus.xml=/g/config/io-modbus.xml"
 	echo "$(readlink -f $py)=/usr/bin/python3"
 	"$py" "$top/host_sim/devices/mb_crosscheck.py" --list-modules | while IFS= read -r f; do
 		case $f in "$top"/*) continue ;; esac
@@ -51,6 +54,7 @@ process_files() {
 }
 passed=0; failed=0
 for t in "$here"/fw_*.sh; do
+	[ -n "${FW_ONLY:-}" ] && [ "$(basename "$t")" != "$FW_ONLY" ] && continue
 	echo "=== $(basename "$t")"
 	if [ "$(basename "$t")" = fw_process.sh ]; then
 		if ! mapfile -t extra < <(process_files) || [ ${#extra[@]} -lt 8 ]; then

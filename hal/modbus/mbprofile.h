@@ -1,0 +1,116 @@
+/* Modbus drive profiles: where a drive keeps each value and in what form.
+ *
+ * Plain C data and integer code, no libc and no libmodbus: the Linux
+ * backend (hal/linux/modbus_drive.c), the drive simulator
+ * (host_sim/devices/mbdrive_sim_main.c) and a microcontroller's master use
+ * the same definitions and the same encoding (tests/test_mbprofile.c).
+ *
+ * A profile names, for each value the master uses, a register (address of
+ * channel 0, the step to the next channel's, 1 or 2 words, signed or not,
+ * the word order of a pair, holding or input registers), and the values the
+ * drive expects. A unit id may carry several motors (channels): a dual
+ * hub-motor drive has two, each a <drive> of its own; a register with step
+ * 0 is shared by the unit's channels (one control word for both motors).
+ *
+ *   speed         target speed, written; one register unit is speed_num /
+ *                 speed_den counts/s (rpm: counts per motor turn / 60);
+ *                 a 16-bit register saturates
+ *   position      position in counts, read
+ *   status        read; the power stage is on while every bit of
+ *                 status_mask is set
+ *   alarm         the drive's fault code, read; 0: none (optional)
+ *   enable        written enable_on / enable_off
+ *   reset         written reset_value after clearAlarm (optional)
+ *   comm_timeout  the drive's own communication-loss stop: written once at
+ *                 start, the timeout in units of comm_unit_ms (optional; a
+ *                 configuration without it must say so)
+ *   init          up to MBP_INIT_MAX registers written at start (a mode)
+ *
+ * Text form (mbp_set: the <modbus> attributes and mbdrive-sim --set):
+ * a register is "ADDR[+STEP] TYPE [hi|lo] [holding|input]" or "none",
+ * ADDR and STEP decimal or 0x hex, TYPE u16 s16 u32 s32 (hi: high word
+ * first, the default); speed_scale "N" or "N/D" counts/s per unit;
+ * init "ADDR=VALUE[,ADDR=VALUE...]".
+ */
+#ifndef HAL_MODBUS_MBPROFILE_H
+#define HAL_MODBUS_MBPROFILE_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+enum {
+	MBP_SPEED = 0,
+	MBP_POSITION,
+	MBP_STATUS,
+	MBP_ALARM,
+	MBP_ENABLE,
+	MBP_RESET,
+	MBP_COMM_TIMEOUT,
+	MBP_REG_COUNT,
+};
+
+#define MBP_SIGNED    0x01u
+#define MBP_LOW_FIRST 0x02u /* of a pair: the low word at the lower address */
+#define MBP_INPUT     0x04u /* input registers (function 04); else holding (03) */
+
+#define MBP_CHANNELS_MAX 2
+#define MBP_INIT_MAX	 4
+#define MBP_NAME_MAX	 24
+
+typedef struct {
+	uint16_t addr; /* channel 0's register */
+	uint16_t step; /* added per channel; 0: one register for every channel */
+	uint8_t words; /* 1 or 2; 0: the profile has no such register */
+	uint8_t flags; /* MBP_SIGNED | MBP_LOW_FIRST | MBP_INPUT */
+} mbp_reg_t;
+
+typedef struct {
+	char name[MBP_NAME_MAX];
+	uint8_t channels; /* motors per unit id, 1..MBP_CHANNELS_MAX */
+	uint8_t block;	  /* registers one read may span (holes included) */
+	mbp_reg_t reg[MBP_REG_COUNT];
+	uint32_t speed_num, speed_den; /* one speed unit = num/den counts/s */
+	uint16_t status_mask;
+	uint16_t enable_on, enable_off, reset_value;
+	uint16_t comm_unit_ms; /* one unit of the comm_timeout register */
+	uint8_t ninit;
+	struct {
+		uint16_t addr, value;
+	} init[MBP_INIT_MAX];
+} mb_profile_t;
+
+/* The built-in profiles by name (mbprofile.c: generic, zlac8015d); NULL
+ * when unknown. */
+const mb_profile_t *mbp_builtin(const char *name);
+/* The i-th built-in profile, NULL past the last. */
+const mb_profile_t *mbp_builtin_at(unsigned i);
+/* The register names of the text form ("speed", ...), by MBP_*. */
+const char *mbp_reg_name(unsigned r);
+
+/* The register of channel ch. */
+static inline uint16_t mbp_addr(const mbp_reg_t *r, unsigned ch)
+{
+	return (uint16_t)(r->addr + r->step * ch);
+}
+/* The value of a register from its words as read (1 or 2 words; sign
+ * extended when signed). */
+int32_t mbp_get(const mbp_reg_t *r, const uint16_t *w);
+/* The words of a value (a 16-bit register takes the low 16 bits). */
+void mbp_put(const mbp_reg_t *r, int32_t v, uint16_t *w);
+/* Target speed: counts/s to the register's words (rounded to the nearest
+ * unit, saturated to the register's range), and back. */
+void mbp_speed_words(const mb_profile_t *p, int32_t cps, uint16_t *w);
+int32_t mbp_speed_cps(const mb_profile_t *p, const uint16_t *w);
+/* The power stage is on in this status word. */
+static inline bool mbp_enabled(const mb_profile_t *p, uint16_t status)
+{
+	return (status & p->status_mask) == p->status_mask;
+}
+
+/* One attribute of the text form. Returns NULL, or why the value is not
+ * taken (a constant string); unknown keys: "unknown". */
+const char *mbp_set(mb_profile_t *p, const char *key, const char *val);
+/* NULL when the profile can run a drive, else what is missing or wrong. */
+const char *mbp_check(const mb_profile_t *p);
+
+#endif
