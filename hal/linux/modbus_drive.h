@@ -162,9 +162,9 @@ void mb_drive_read(mb_bus_t *b, unsigned i, hal_drive_state_t *st);
  * and the count of failed reads. */
 uint32_t mb_battery_mv(mb_bus_t *b, uint32_t *errors);
 /* "modbus<n> DEVICE requests N retries N timeouts N crc_errors N
- * bad_replies N exceptions N busy N illegal N", then per drive " unit<u>
- * (.<channel> on a multi-channel profile) timeouts N crc_errors N
- * exceptions N busy N illegal N". */
+ * bad_replies N exceptions N busy N illegal N", then per drive " unit<u>"
+ * (" unit<u>.<channel>" on a multi-channel profile) and the same six
+ * counts of its own. The length written. */
 int mb_bus_counters(mb_bus_t *b, unsigned n, char *buf, size_t len);
 
 #endif
