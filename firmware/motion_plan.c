@@ -181,6 +181,17 @@ static bool head_line_remaining(motion_t *m, q32_t *rem)
 	return true;
 }
 
+/* Collinear: the waypoint is passed straight through at full speed. */
+static bool pass_straight(motion_t *m, motion_cmd_t *c, uint8_t i)
+{
+	c->corner = (traj_corner_t){0};
+	c->corner.k_mm_deg = INT64_MAX / 4;
+	c->corner.vacc_pt = INT64_MAX / 4;
+	c->has_corner = true;
+	motion_backward_pass_from(m, i);
+	return true;
+}
+
 /* Plan the corner at queued cruise command i (blending into i + 1); true
  * when one was planned (and the corner speeds with it). */
 bool motion_plan_corner(motion_t *m, uint8_t i)
@@ -202,15 +213,8 @@ bool motion_plan_corner(motion_t *m, uint8_t i)
 	int64_t cross = (int64_t)c->ux * n->uy - (int64_t)c->uy * n->ux;
 	int64_t dot = (int64_t)c->ux * n->ux + (int64_t)c->uy * n->uy;
 	q32_t phi = fx_atan2_deg(cross, dot);
-	if (fx_abs64(phi) < TINY_DEG) {
-		/* Collinear: pass straight through at full speed. */
-		c->corner = (traj_corner_t){0};
-		c->corner.k_mm_deg = INT64_MAX / 4;
-		c->corner.vacc_pt = INT64_MAX / 4;
-		c->has_corner = true;
-		motion_backward_pass_from(m, i);
-		return true;
-	}
+	if (fx_abs64(phi) < TINY_DEG)
+		return pass_straight(m, c, i);
 	q32_t t = m->p.cruise_blend_mm;
 	q32_t avail_in = lin;
 	if (i > 0) {
