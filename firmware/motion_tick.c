@@ -652,6 +652,12 @@ void motion_tick(motion_t *m, const fx_pose_t *measured, fx_twist_t *out)
 	case MODE_JOYSTICK:
 		motion_velocity_tick(m, out);
 		odom_integrate(&m->ref, out, NULL);
+		/* The servo off (measured given): nothing is driven, the
+		 * joystick waits at rest, and the reference follows the
+		 * wheels as when idle (else servo on would start from where
+		 * the unit was before a push: fault 204, found by fuzz_model). */
+		if (measured)
+			m->ref = *measured;
 		break;
 	case MODE_CONTINUOUS:
 		motion_continuous_tick(m, out);

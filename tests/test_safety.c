@@ -306,6 +306,31 @@ static void test_stop_at_rest_is_ready_at_once(void **state)
 	assert_true(fabs(odom_x() - 10.0) < 0.05);
 }
 
+/* Found by fuzz_model: with the servo off and the joystick enabled, the
+ * reference followed the wheels only when idle, not while the joystick
+ * waited; a push, setJoystick(false) and setServo(true) in one period then
+ * started the hold from where the unit had been before the push: the next
+ * wheel movement at rest pulled it back there (past 50 mm: fault 204). */
+static void test_servo_on_after_push_under_joystick(void **state)
+{
+	(void)state;
+	EXPECT("setPower true", "ok true");
+	EXPECT("$sim joystick 0 0 0", "ok joystick 0 0 0");
+	EXPECT("setJoystick true", "ok true");
+	sim_run_ms(&S, 10);
+	EXPECT("$sim push 40 0 0", "ok push 40.000 0.000 0.000");
+	sim_run_ms(&S, 100);
+	EXPECT("setJoystick false", "ok true");
+	EXPECT("setServo true", "ok true");
+	sim_run_ms(&S, 100);
+	/* Pushed again, now held: the hold brings it back to where the
+	 * servo came on (40 mm), not to where it stood before (0). */
+	EXPECT("$sim push 1 0 0", "ok push 41.000 0.000 0.000");
+	sim_run_ms(&S, 3000);
+	EXPECT("getState", "ok true 16 \"Ready\"");
+	assert_true(fabs(odom_x() - 40.0) < 0.05);
+}
+
 /* 11: drive 0's power stage held off (an STO): servo on waits, the other
  * wheel never drives, and 500 ms on it is fault 211 naming drive 0 and its
  * state. */
@@ -402,6 +427,7 @@ int main(void)
 	    cmocka_unit_test_setup(test_stop_ends_pause, setup_diff),
 	    cmocka_unit_test_setup(test_stop_in_jog_drops_queued_route, setup_diff),
 	    cmocka_unit_test_setup(test_stop_at_rest_is_ready_at_once, setup_diff),
+	    cmocka_unit_test_setup(test_servo_on_after_push_under_joystick, setup_diff),
 	    cmocka_unit_test_setup(test_servo_on_waits_for_every_drive, setup_diff),
 	    cmocka_unit_test_setup(test_drive_leaving_enabled_stops_all, setup_diff),
 	    cmocka_unit_test_setup(test_drive_restart_loses_position, setup_diff),
