@@ -8,6 +8,8 @@
 #   tools/figures.sh make BUILD      make every figure from BUILD/vehicle-sim (make figures)
 #   tools/figures.sh check           every stamp against the files as they are now
 #   tools/figures.sh list            the figures' names
+#   tools/figures.sh file NAME       NAME's figure
+#   tools/figures.sh inputs NAME     the files NAME's stamp covers, before the figure
 #   tools/figures.sh script NAME     the console lines NAME's run feeds vehicle-sim
 #
 # A figure's inputs: the firmware (firmware/), the simulated plant and its
@@ -148,6 +150,15 @@ check)
 	;;
 list)
 	echo $FIGURES
+	;;
+file)
+	[ $# -eq 2 ] || { echo "usage: tools/figures.sh file NAME" >&2; exit 2; }
+	figure "$2"
+	echo "$file"
+	;;
+inputs)
+	[ $# -eq 2 ] || { echo "usage: tools/figures.sh inputs NAME" >&2; exit 2; }
+	inputs "$2"
 	;;
 script)
 	[ $# -eq 2 ] || { echo "usage: tools/figures.sh script NAME" >&2; exit 2; }
