@@ -1328,17 +1328,18 @@ static void test_backends_drive(void **state)
 		      &b, err, sizeof(err), -1);
 	assert_string_equal(err, ":7: drive.axis: duplicate '1'");
 	/* polarity */
-	load_backends("    <modbus bus=\"1\" device=\"/dev/ttyUSB0\" reg_target_speed=\"0\"\n"
-		      "            reg_position=\"2\" reg_status=\"4\" reg_alarm=\"5\"\n"
-		      "            reg_servo_on=\"6\" reg_fault_reset=\"7\"/>\n"
-		      "    <drive axis=\"0\" type=\"cia402\" bus=\"0\" node=\"1\" "
-		      "polarity=\"reverse\"/>\n"
-		      "    <drive axis=\"1\" type=\"cia402\" bus=\"0\" node=\"2\" "
-		      "polarity=\"normal\"/>\n"
-		      "    <drive axis=\"2\" type=\"modbus\" bus=\"1\" unit=\"4\" "
-		      "polarity=\"reverse\"/>\n"
-		      "    <drive axis=\"3\" type=\"modbus\" bus=\"1\" unit=\"5\"/>\n",
-		      &b, err, sizeof(err), 0);
+	load_backends(
+	    "    <modbus bus=\"1\" device=\"/dev/ttyUSB0\" reg_target_speed=\"0\"\n"
+	    "            reg_position=\"2\" reg_status=\"4\" reg_alarm=\"5\"\n"
+	    "            reg_servo_on=\"6\" reg_fault_reset=\"7\" reg_comm_timeout=\"8\"/>\n"
+	    "    <drive axis=\"0\" type=\"cia402\" bus=\"0\" node=\"1\" "
+	    "polarity=\"reverse\"/>\n"
+	    "    <drive axis=\"1\" type=\"cia402\" bus=\"0\" node=\"2\" "
+	    "polarity=\"normal\"/>\n"
+	    "    <drive axis=\"2\" type=\"modbus\" bus=\"1\" unit=\"4\" "
+	    "polarity=\"reverse\"/>\n"
+	    "    <drive axis=\"3\" type=\"modbus\" bus=\"1\" unit=\"5\"/>\n",
+	    &b, err, sizeof(err), 0);
 	assert_true(b.drive_reverse[0]);
 	assert_false(b.drive_reverse[1]);
 	assert_true(b.drive_reverse[2]);
