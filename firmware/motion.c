@@ -219,11 +219,23 @@ void motion_joystick_input(motion_t *m, int16_t x, int16_t y, int16_t r, bool pr
 
 /* ---- pause / stop ---------------------------------------------------- */
 
+/* Still to the last bit: no velocity, no change of it, the seek law idle
+ * (a jog or goal sent but not yet run by a tick is such). */
+static bool at_rest(const motion_t *m)
+{
+	return twist_zero(&m->vel) && twist_zero(&m->vacc) &&
+	       (!ONLINE_JERK || !(m->sk_on[0] | m->sk_on[1]));
+}
+
 void motion_pause(motion_t *m)
 {
 	m->paused = true;
 	if (m->mode == MODE_JOG || m->mode == MODE_JOYSTICK)
 		m->vtarget = (fx_twist_t){0};
+	/* A jog cannot wait for resume (it is refused while paused): the
+	 * pause ends it, at once when it has not moved (docs/states.md). */
+	if (m->mode == MODE_JOG && at_rest(m))
+		m->mode = MODE_IDLE;
 }
 
 void motion_resume(motion_t *m)
@@ -256,8 +268,7 @@ void motion_stop(motion_t *m)
 		m->face_ok = false;
 		/* A jog or goal at rest (paused, or not yet ticked) has nothing
 		 * to brake: Ready at once, as the model of the spec has it. */
-		if (m->mode != MODE_JOYSTICK && twist_zero(&m->vel) && twist_zero(&m->vacc) &&
-		    (!ONLINE_JERK || !(m->sk_on[0] | m->sk_on[1]))) {
+		if (m->mode != MODE_JOYSTICK && at_rest(m)) {
 			m->mode = MODE_IDLE;
 			m->stopping = false;
 		}

@@ -286,7 +286,8 @@ static void test_stop_in_jog_drops_queued_route(void **state)
 
 /* Found by the differential harness: a jog paused before it ever moved,
  * then stopped, has nothing to brake: Ready at once, and the next command
- * is not refused for a stop still under way. The same for a goal. */
+ * is not refused for a stop still under way. The same for a goal; and a
+ * jog paused before it moved is over, resumed or not. */
 static void test_stop_at_rest_is_ready_at_once(void **state)
 {
 	(void)state;
@@ -303,6 +304,13 @@ static void test_stop_at_rest_is_ready_at_once(void **state)
 	EXPECT("moveForward 10", "ok true");
 	sim_run_ms(&S, 1000);
 	EXPECT("getState", "ok true 16 \"Ready\"");
+	assert_true(fabs(odom_x() - 10.0) < 0.05);
+	/* A pause ends a jog that has not moved yet: resume finds Ready. */
+	EXPECT("moveJog 300 0 40", "ok true");
+	EXPECT("pause", "ok true");
+	EXPECT("resume", "ok true");
+	EXPECT("getState", "ok true 16 \"Ready\"");
+	sim_run_ms(&S, 200);
 	assert_true(fabs(odom_x() - 10.0) < 0.05);
 }
 
