@@ -121,10 +121,16 @@ static void encoder_stuck(vehicle_t *v, uint8_t i)
  * commanded above the stuck threshold whose count did not change. */
 static inline void supervise_encoder(vehicle_t *v, uint8_t i, bool moved)
 {
+	/* A count that moved first: a moving wheel's tick asks nothing more
+	 * (8 instructions a wheel, tools/bench/tickcost.sh). */
+	if (moved) {
+		v->encoder_still_ticks[i] = 0;
+		return;
+	}
 	int32_t cps = v->wheel_cps_q8[i];
 	bool commanded =
 	    v->servo && (cps >= v->encoder_stuck_cps_q8 || cps <= -v->encoder_stuck_cps_q8);
-	if (!commanded || moved)
+	if (!commanded)
 		v->encoder_still_ticks[i] = 0;
 	else if (++v->encoder_still_ticks[i] >= v->encoder_stuck_ticks)
 		encoder_stuck(v, i);
