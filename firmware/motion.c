@@ -197,10 +197,14 @@ void motion_joystick_enable(motion_t *m, bool on)
 		/* Decelerate at the acceleration limit, then idle; at rest idle
 		 * now (a command sent next is not refused for a stop). */
 		m->vtarget = (fx_twist_t){0};
-		if (motion_is_moving(m))
+		if (motion_is_moving(m)) {
 			m->stopping = true;
-		else
+		} else {
+			/* A stop still flagged (stop() under the joystick at
+			 * rest) has nothing left to brake either. */
 			m->mode = MODE_IDLE;
+			m->stopping = false;
+		}
 	}
 }
 

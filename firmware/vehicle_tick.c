@@ -495,6 +495,10 @@ static void supervise_position(vehicle_t *v, int64_t ferr, const fx_twist_t *mov
 	if ((moved->vx_pt | moved->vy_pt | moved->w_pt) != 0)
 		hold_pose(v);
 	if (ferr <= v->window_q32) {
+		/* Taken as done at the settle timeout (154): it stays done
+		 * when the wheels come into the window after all. */
+		if (v->settle_ticks > v->settle_timeout_ticks)
+			v->inpos_ticks = v->window_ticks;
 		v->settle_ticks = 0;
 		if (v->inpos_ticks < v->window_ticks)
 			v->inpos_ticks++;

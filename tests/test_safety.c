@@ -305,6 +305,16 @@ static void test_stop_at_rest_is_ready_at_once(void **state)
 	sim_run_ms(&S, 1000);
 	EXPECT("getState", "ok true 16 \"Ready\"");
 	assert_true(fabs(odom_x() - 10.0) < 0.05);
+	/* stop under the joystick at rest, then the joystick let go: nothing
+	 * is left to brake, a goal sent next is taken (found by fuzz_model:
+	 * it was refused 122). */
+	EXPECT("$sim joystick 0 0 0", "ok joystick 0 0 0");
+	EXPECT("setJoystick true", "ok true");
+	sim_tick(&S);
+	EXPECT("stop", "ok true");
+	EXPECT("setJoystick false", "ok true");
+	EXPECT("moveContinuousRel 0 0 0", "ok true");
+	sim_run_ms(&S, 100);
 	/* A pause ends a jog that has not moved yet: resume finds Ready. */
 	EXPECT("moveJog 300 0 40", "ok true");
 	EXPECT("pause", "ok true");
