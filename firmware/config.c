@@ -36,8 +36,12 @@ VS_CONFIG_FIELDS(ROW_SIZE)
 _Static_assert(sizeof(vs_config_t) <= UINT16_MAX, "offsets fit the rows");
 
 /* The firmware's columns for readers: names, where and what. */
-#define ROW(m, cnt, t, ...)                                                                        \
-	{.name = #m, .off = (uint16_t)offsetof(vs_config_t, m), .type = VS_CFG_##t, .n = (cnt)},
+#define ROW(m, cnt, t, d, lo, hi, ex, w, ...)                                                      \
+	{.name = #m,                                                                               \
+	 .off = (uint16_t)offsetof(vs_config_t, m),                                                \
+	 .type = VS_CFG_##t,                                                                       \
+	 .n = (cnt),                                                                               \
+	 .when = VS_CFG_WHEN_##w},
 const vs_config_field_t vs_config_fields[VS_CONFIG_NFIELDS] = {VS_CONFIG_FIELDS(ROW)};
 #undef ROW
 

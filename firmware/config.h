@@ -108,6 +108,13 @@ typedef enum {
 	VS_CFG_KIN = 4, /* vs_kinematics_t */
 } vs_config_type_t;
 
+/* When a change at run time takes effect (the table's when column). */
+typedef enum {
+	VS_CFG_WHEN_ANY = 0,	 /* at once, whatever the unit does */
+	VS_CFG_WHEN_OFF = 1,	 /* with the servo off and no motion queued */
+	VS_CFG_WHEN_RESTART = 2, /* from the next start */
+} vs_config_when_t;
+
 /* One row of the table as the firmware keeps it for readers of a running
  * configuration (the console's $config): no range, no XML columns.
  * vs_config_defaults and vs_config_check are generated from the rows. */
@@ -116,6 +123,7 @@ typedef struct {
 	uint16_t off;	  /* offsetof(vs_config_t, member) */
 	uint8_t type;	  /* vs_config_type_t */
 	uint8_t n;	  /* elements: 1, or the array's length */
+	uint8_t when;	  /* vs_config_when_t */
 } vs_config_field_t;
 
 /* Row indexes, VS_CONFIG_ROW_<member>, in the table's order. */

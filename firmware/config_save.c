@@ -3,7 +3,7 @@
 
 #include "cfgstore.h"
 
-static uint8_t type_size(uint8_t type)
+uint8_t vs_config_type_size(uint8_t type)
 {
 	switch (type) {
 	case VS_CFG_DOUBLE:
@@ -55,7 +55,7 @@ size_t vs_config_encode(const vs_config_t *cur, const vs_config_t *base, uint8_t
 	uint16_t count = 0;
 	for (unsigned i = 0; i < VS_CONFIG_NFIELDS; i++) {
 		const vs_config_field_t *f = &vs_config_fields[i];
-		uint8_t sz = type_size(f->type);
+		uint8_t sz = vs_config_type_size(f->type);
 		size_t nl = name_len(f->name);
 		for (uint8_t k = 0; k < f->n; k++) {
 			const uint8_t *a = (const uint8_t *)cur + f->off + (size_t)k * sz;
@@ -115,7 +115,8 @@ static vs_config_decode_status_t walk(vs_config_t *out, const uint8_t *buf, size
 		/* A boolean is one byte, 0 or 1: no other value is read into
 		 * a bool. */
 		bool bad_bool = type == VS_CFG_BOOL && sz == 1 && buf[pos] > 1;
-		if (!f || f->type != type || k >= f->n || sz != type_size(type) || bad_bool) {
+		if (!f || f->type != type || k >= f->n || sz != vs_config_type_size(type) ||
+		    bad_bool) {
 			info->dropped++;
 		} else {
 			if (apply) {

@@ -27,6 +27,8 @@
 #endif
 
 uint32_t vs_config_schema(void);
+/* Bytes of one element of a row's type (vs_config_type_t). */
+uint8_t vs_config_type_size(uint8_t type);
 
 /* The fields of cur that differ from base, into buf; the bytes written, or
  * 0 when they do not fit cap. */

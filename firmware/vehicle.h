@@ -89,6 +89,19 @@ void vehicle_set_link_timeout(vehicle_t *v, uint32_t ms);
 void vehicle_jerk(const vehicle_t *v, vs_real_t *jt, vs_real_t *jr);
 bool vehicle_set_jerk(vehicle_t *v, vs_real_t jt, vs_real_t jr);
 
+/* A configuration changed at run time (config_keep.h judges it first with
+ * vs_config_check and by the table's when column). vehicle_config_idle: the
+ * servo off and no motion queued, when a field of class OFF may change.
+ * vehicle_reconfigure (only then): everything derived from the
+ * configuration is derived again as at init, the unit's state (power,
+ * alarms, pose) kept; a speed, acceleration or jog timeout in force stays
+ * while within its new limits and its default is unchanged, else it is
+ * the new default. vehicle_config_live: a change of class ANY fields only
+ * (link timeout, jerk in force, battery thresholds), at any time. */
+bool vehicle_config_idle(const vehicle_t *v);
+void vehicle_reconfigure(vehicle_t *v, const vs_config_t *cfg);
+void vehicle_config_live(vehicle_t *v, const vs_config_t *cfg);
+
 /* The operations, in spec order. */
 bool vs_clearAlarm(vehicle_t *v);
 bool vs_getAccelerationLimit(vehicle_t *v, vs_real_t *accLimitT, vs_real_t *accLimitR);

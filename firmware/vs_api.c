@@ -471,3 +471,65 @@ bool vehicle_set_jerk(vehicle_t *v, vs_real_t jt, vs_real_t jr)
 	motion_set_jerk(&v->motion, to_q32(jt), to_q32(jr));
 	return true;
 }
+
+/* ---- the configuration changed at run time ---------------------------- */
+
+bool vehicle_config_idle(const vehicle_t *v)
+{
+	return !v->servo && !motion_has_work(&v->motion);
+}
+
+/* A setting in force (t, r) that is still within its new limits, or the
+ * new default (also when the default itself changed). */
+static vs_velocity_t kept_setting(vs_velocity_t set, vs_velocity_t old_def, vs_velocity_t def,
+				  vs_real_t lim_t, vs_real_t lim_r)
+{
+	bool def_changed =
+	    old_def.translation != def.translation || old_def.rotation != def.rotation;
+	if (def_changed || check_setting(set.translation, lim_t) ||
+	    check_setting(set.rotation, lim_r))
+		return def;
+	return set;
+}
+
+void vehicle_reconfigure(vehicle_t *v, const vs_config_t *cfg)
+{
+	const vs_config_t *o = &v->cfg;
+	vs_velocity_t vel =
+	    kept_setting(v->vel_set, (vs_velocity_t){o->vel_default_t_mm_s, o->vel_default_r_deg_s},
+			 (vs_velocity_t){cfg->vel_default_t_mm_s, cfg->vel_default_r_deg_s},
+			 cfg->vel_limit_t_mm_s, cfg->vel_limit_r_deg_s);
+	vs_velocity_t acc = kept_setting(
+	    v->acc_set, (vs_velocity_t){o->acc_default_t_mm_s2, o->acc_default_r_deg_s2},
+	    (vs_velocity_t){cfg->acc_default_t_mm_s2, cfg->acc_default_r_deg_s2},
+	    cfg->acc_limit_t_mm_s2, cfg->acc_limit_r_deg_s2);
+	int16_t jog = cfg->jog_timeout_default_ms != o->jog_timeout_default_ms
+			  ? (int16_t)cfg->jog_timeout_default_ms
+			  : v->jog_timeout_ms;
+
+	/* As vehicle_init derives them; the unit's state (power, alarms, the
+	 * pose, the encoders' last counts) stays. */
+	v->cfg = *cfg;
+	vs_real_t counts_per_mm = init_kin(v, cfg, init_motion(v, cfg));
+	kin_sync(&v->kin, v->meas_counts);
+	motion_set_pose(&v->motion, &v->odom);
+	init_supervision(v, cfg, counts_per_mm);
+	motion_set_velocity(&v->motion, to_q32(vel.translation), to_q32(vel.rotation));
+	motion_set_accel(&v->motion, to_q32(acc.translation), to_q32(acc.rotation));
+	motion_set_jog_timeout_ms(&v->motion, (uint16_t)jog);
+	v->vel_set = vel;
+	v->acc_set = acc;
+	v->jog_timeout_ms = jog;
+}
+
+void vehicle_config_live(vehicle_t *v, const vs_config_t *cfg)
+{
+	uint32_t link = v->cfg.link_timeout_ms;
+	v->cfg = *cfg;
+	if (cfg->link_timeout_ms != link)
+		vehicle_set_link_timeout(v, cfg->link_timeout_ms);
+	motion_set_jerk(&v->motion, to_q32(cfg->jerk_default_t_mm_s3),
+			to_q32(cfg->jerk_default_r_deg_s3));
+	v->battery_low_mv = (uint32_t)scaled(cfg->battery_low_v, 1000u);
+	v->battery_critical_mv = (uint32_t)scaled(cfg->battery_critical_v, 1000u);
+}

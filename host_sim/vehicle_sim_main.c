@@ -21,7 +21,9 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "../firmware/config_keep.h"
 #include "../hal/posix/config_xml.h"
+#include "../hal/posix/filestore.h"
 #include "../hal/posix/rt.h"
 #include "../hal/posix/socketcan.h"
 #include "../hal/posix/tty.h"
@@ -60,6 +62,9 @@ typedef struct {
 } app_t;
 
 static app_t app;
+/* The configuration changed at run time, and its file (--store). */
+static cfgkeep_t keep;
+static filestore_t store;
 
 /* Alarm events go to the log (stderr), in simulated time. */
 static alarm_log_t alarm_events;
@@ -339,6 +344,8 @@ static void usage(FILE *f)
 	      "                  time, stdin lines ('$wait MS', '$sim ...') are answered on\n"
 	      "                  stdout, and the run ends at EOF on stdin\n"
 	      "  --baud N        line speed set on the pty (default 115200; nominal on a pty)\n"
+	      "  --store FILE    keep the configuration changed at run time in FILE ($config\n"
+	      "                  save; read at start over the vehicle file; default: none)\n"
 	      "  --help          this text\n"
 	      "Console on stdin/stdout (spec section 7); simulator extras: $wait MS, $sim ...\n"
 	      "(see host_sim/sim.h).\n"
@@ -357,7 +364,7 @@ static const char *exe_path(char buf[PATH_MAX])
 
 int main(int argc, char **argv)
 {
-	const char *config_path = NULL, *io_path = NULL;
+	const char *config_path = NULL, *io_path = NULL, *store_path = NULL;
 	char exe[PATH_MAX], config_buf[PATH_MAX], io_buf[PATH_MAX];
 	const char *trace_path = NULL;
 	unsigned long trace_every = 1;
@@ -382,7 +389,8 @@ int main(int argc, char **argv)
 		O_NODE,
 		O_HZ,
 		O_PTY,
-		O_BAUD
+		O_BAUD,
+		O_STORE
 	};
 	static const struct option opts[] = {
 	    {"config", required_argument, NULL, O_CONFIG},
@@ -398,6 +406,7 @@ int main(int argc, char **argv)
 	    {"status-hz", required_argument, NULL, O_HZ},
 	    {"pty", no_argument, NULL, O_PTY},
 	    {"baud", required_argument, NULL, O_BAUD},
+	    {"store", required_argument, NULL, O_STORE},
 	    {NULL, 0, NULL, 0},
 	};
 	int o;
@@ -440,6 +449,9 @@ int main(int argc, char **argv)
 			break;
 		case O_PTY:
 			pty = true;
+			break;
+		case O_STORE:
+			store_path = optarg;
 			break;
 		case O_BAUD: {
 			char *end;
@@ -515,9 +527,21 @@ int main(int argc, char **argv)
 	app_t *a = &app;
 	const char *bad = NULL;
 	rt_log_open("vehicle-sim", false);
+	if (store_path && filestore_open(&store, store_path, err, sizeof(err)) < 0) {
+		fprintf(stderr, "vehicle-sim: --store: %s\n", err);
+		return 1;
+	}
+	/* The vehicle file is the base; the store's overlay goes over it. */
+	cfgkeep_load(&keep, &cfg, store_path ? &store.hs : NULL, &cfg);
 	if (sim_init_ex(&a->sim, &cfg, &pp, &bad) < 0) {
 		fprintf(stderr, "vehicle-sim: configuration rejected: %s\n", bad ? bad : "?");
 		return 1;
+	}
+	cfgkeep_attach(&keep, &a->sim.vehicle);
+	console_set_keep(&a->sim.srv.con, &keep);
+	if (store_path) {
+		console_config_store(&keep, err, sizeof(err));
+		fprintf(stderr, "vehicle-sim: configuration %s (%s)\n", err, store_path);
 	}
 	sim_set_output(&a->sim, write_stdout, a);
 	alarm_log_init(&alarm_events);

@@ -15,11 +15,6 @@
 #include "fmt.h"
 #include "numparse.h"
 
-/* $config reads the configuration through the host's vs_config_get. */
-#if defined(VS_REAL_Q32) && !defined(VS_NO_CONFIG_EXTRA)
-#define VS_NO_CONFIG_EXTRA
-#endif
-
 /* Tokens kept per line: an operation needs at most 1 + CMD_MAX_FIELDS; '$'
  * commands get a few more. Further tokens are only counted. */
 #define CONSOLE_ARGV_MAX 16
@@ -337,56 +332,6 @@ static void rb_pose(rbuf_t *r, const fx_pose_t *p)
 	rb_q32(r, p->th_deg);
 }
 
-#ifndef VS_NO_CONFIG_EXTRA
-/* "ok" and " NAME" for every row of the configuration table: the list of
- * $config fits one reply (a char per byte of " NAME", as the NUL of #m). */
-struct config_list_bytes {
-#define CONFIG_NAME_BYTES(m, ...) char m[sizeof(#m)];
-	VS_CONFIG_FIELDS(CONFIG_NAME_BYTES)
-#undef CONFIG_NAME_BYTES
-};
-_Static_assert(2 + sizeof(struct config_list_bytes) <= CONSOLE_REPLY_MAX,
-	       "$config's list fits one reply");
-
-/* $config [NAME]: the names of the configuration's fields, or one field's
- * value in the running configuration, each element of an array in turn, in
- * the formats of the operations' replies. */
-static bool exec_config(console_t *c, char **argv, unsigned ntok, rbuf_t *r)
-{
-	const vs_config_field_t *f = vs_config_fields;
-
-	if (ntok > 2)
-		return reply_arity(c, r, "$config", "0 or 1 argument", ntok);
-	if (ntok == 1) {
-		rb_puts(r, "ok");
-		for (; f < vs_config_fields + VS_CONFIG_NFIELDS; f++) {
-			rb_puts(r, " ");
-			rb_puts(r, f->name);
-		}
-		return true;
-	}
-	while (f < vs_config_fields + VS_CONFIG_NFIELDS && !np_streq_nocase(argv[1], f->name))
-		f++;
-	if (f == vs_config_fields + VS_CONFIG_NFIELDS)
-		return reply_error(c, r, "%d $config: no field %s", CONSOLE_E_EXTRA, argv[1]);
-	rb_puts(r, "ok ");
-	rb_puts(r, f->name);
-	for (unsigned k = 0; k < f->n; k++) {
-		double v = vs_config_get(&c->v->cfg, f, k);
-
-		if (f->type == VS_CFG_DOUBLE) {
-			rb_puts(r, " ");
-			rb_real(r, v);
-		} else if (f->type == VS_CFG_BOOL) {
-			rb_puts(r, v != 0.0 ? " true" : " false");
-		} else {
-			rb_printf(r, " %lu", (unsigned long)v);
-		}
-	}
-	return true;
-}
-#endif
-
 /* $jerk [T R]: the jerk moves run at, mm/s^3 and deg/s^3 (0 = unlimited),
  * with the configured limits; the set form takes both or changes nothing. */
 static bool exec_jerk(console_t *c, char **argv, unsigned ntok, rbuf_t *r)
@@ -448,7 +393,11 @@ static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_
 		/* Its configuration is compiled in (hal/cortexm/board_main.c). */
 		return reply_error(c, r, "%d $config is not in this build", CONSOLE_E_EXTRA);
 #else
-		return exec_config(c, argv, ntok, r);
+		console_config(c, argv, ntok, r->buf, r->cap);
+		r->len = strlen(r->buf);
+		if (r->buf[0] == 'e')
+			c->errors++;
+		return true;
 #endif
 	}
 	if (np_streq_nocase(cmd, "$watchdog")) {
@@ -495,6 +444,11 @@ static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_
 			rb_pose(r, &d.ref_pose);
 			rb_puts(r, " odom");
 			rb_pose(r, &d.odom_pose);
+#ifndef VS_NO_CONFIG_EXTRA
+			char tail[160];
+			console_config_diag(c, tail, sizeof tail);
+			rb_puts(r, tail);
+#endif
 		}
 		return true;
 	}

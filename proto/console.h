@@ -36,8 +36,11 @@ typedef void (*console_write_fn)(void *ctx, const char *s, size_t n);
  * it does not know it either. reply gets one line without the newline. */
 typedef bool (*console_extra_fn)(void *ctx, int argc, char **argv, char *reply, size_t cap);
 
+struct cfgkeep;
+
 typedef struct {
 	vehicle_t *v;
+	struct cfgkeep *keep; /* $config's changes and store; NULL: read only */
 	console_write_fn write;
 	void *wctx;
 	console_extra_fn extra;
@@ -54,6 +57,18 @@ typedef struct {
 
 void console_init(console_t *c, vehicle_t *v, console_write_fn write, void *wctx);
 void console_set_extra(console_t *c, console_extra_fn fn, void *ctx);
+/* $config changes, compares and saves through keep (firmware/config_keep.h,
+ * attached to the same unit); without one it only reads. */
+void console_set_keep(console_t *c, struct cfgkeep *keep);
+/* The $config extra (console_config.c): the reply, "ok ..." or "error ...",
+ * into reply (cap bytes). */
+void console_config(console_t *c, char **argv, unsigned ntok, char *reply, size_t cap);
+/* What the configuration store held at start, as $config store answers it
+ * without "ok " (a main's log line). */
+void console_config_store(const struct cfgkeep *k, char *buf, size_t cap);
+/* $diag's tail: " config store ..." when the store at start was written by
+ * another table or did not read; empty otherwise. */
+void console_config_diag(const console_t *c, char *buf, size_t cap);
 /* Feed received bytes; replies are written as whole lines ending in "\n". */
 void console_feed(console_t *c, const uint8_t *data, size_t n);
 /* The same two as the frame receiver's sinks (frame_other_fn, frame_hold_fn

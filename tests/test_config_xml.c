@@ -471,7 +471,7 @@ static void every_row_has_its_attribute(void **state)
 	static const struct {
 		const char *elem, *attr;
 	} xml[] = {
-#define XML_COLUMNS(m, n, t, d, lo, hi, ex, el, at) {el, at},
+#define XML_COLUMNS(m, n, t, d, lo, hi, ex, wh, el, at) {el, at},
 	    VS_CONFIG_FIELDS(XML_COLUMNS)
 #undef XML_COLUMNS
 	};

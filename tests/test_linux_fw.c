@@ -545,7 +545,8 @@ static void console(const char *line, char *reply, size_t cap)
 	fw_console(MASTER, line, reply, cap, 2000);
 }
 
-static void start_fw(void)
+/* vehicle-fw on a new port; store: its --store file, or NULL. */
+static void start_fw_store(const char *store)
 {
 	int slave;
 	char exe[600];
@@ -559,11 +560,20 @@ static void start_fw(void)
 	if (FW_PID == 0) {
 		int fd = open(FW_LOGPATH, O_WRONLY | O_CREAT | O_TRUNC, 0644);
 		dup2(fd, 2);
-		execl(exe, exe, "--config", FW_VPATH, "--io", FW_IOPATH, "--port", port,
-		      "--rt-priority", "0", (char *)NULL);
+		if (store)
+			execl(exe, exe, "--config", FW_VPATH, "--io", FW_IOPATH, "--port", port,
+			      "--rt-priority", "0", "--store", store, (char *)NULL);
+		else
+			execl(exe, exe, "--config", FW_VPATH, "--io", FW_IOPATH, "--port", port,
+			      "--rt-priority", "0", (char *)NULL);
 		_exit(127);
 	}
 	close(slave); /* vehicle-fw opens the port by name */
+}
+
+static void start_fw(void)
+{
+	start_fw_store(NULL);
 }
 
 static int stop_fw(void)
@@ -808,6 +818,59 @@ static int teardown(void **state)
 	return 0;
 }
 
+/* The configuration changed at run time, saved in the --store file, is in
+ * force at the next start, and the log says what the store held; a file
+ * of garbage starts the unit on the vehicle file with warning 156. */
+static void test_fw_store(void **state)
+{
+	(void)state;
+	char reply[512], log[8192], store[700];
+	write_fw_config();
+	snprintf(store, sizeof(store), "%s.store", FW_VPATH);
+	unlink(store);
+	start_fw_store(store);
+	fw_sleep_ms(200);
+	console("$config store", reply, sizeof(reply));
+	assert_string_equal(reply, "ok store empty table 0x916B11C3");
+	console("$config following_error_mm 20", reply, sizeof(reply));
+	assert_string_equal(reply, "ok following_error_mm 20.000");
+	console("$config save", reply, sizeof(reply));
+	assert_string_equal(reply, "ok saved 1 following_error_mm");
+	assert_int_equal(stop_fw(), 0);
+	fw_read_log(log, sizeof(log));
+	assert_non_null(strstr(log, "vehicle-fw: configuration store empty table 0x916B11C3 ("));
+	close(MASTER);
+
+	start_fw_store(store);
+	fw_sleep_ms(200);
+	console("$config following_error_mm", reply, sizeof(reply));
+	assert_string_equal(reply, "ok following_error_mm 20.000");
+	assert_int_equal(stop_fw(), 0);
+	fw_read_log(log, sizeof(log));
+	assert_non_null(strstr(log, "vehicle-fw: configuration store loaded seq 1 schema "
+				    "0x916B11C3 applied 1 dropped 0 table 0x916B11C3 ("));
+	close(MASTER);
+
+	/* both slots garbage (a store of another program, damage) */
+	static char junk[4097];
+	memset(junk, 'Z', sizeof(junk) - 1);
+	fw_write_file(store, junk);
+	start_fw_store(store);
+	fw_sleep_ms(200);
+	console("$config following_error_mm", reply, sizeof(reply));
+	assert_string_equal(reply, "ok following_error_mm 50.000");
+	console("getActiveAlarm 1", reply, sizeof(reply));
+	assert_string_equal(reply,
+			    "ok true 1 1 156 warning \"saved configuration corrupt: base in use\"");
+	assert_int_equal(stop_fw(), 0);
+	fw_read_log(log, sizeof(log));
+	assert_non_null(strstr(
+	    log, "vehicle-fw: warning: configuration store corrupt table 0x916B11C3 torn ("));
+	close(MASTER);
+	MASTER = -1;
+	unlink(store);
+}
+
 /* The host runs the configuration tests; "--process" runs the tests that
  * start vehicle-fw, in the QEMU guest on its instruction-counted clock
  * (tests/qemu/fw_process.sh), where the host's load cannot make them late. */
@@ -824,6 +887,7 @@ int main(int argc, char **argv)
 	    cmocka_unit_test_teardown(test_fw_alarm_events, teardown),
 	    cmocka_unit_test_teardown(test_fw_pipelined_and_long_comment, teardown),
 	    cmocka_unit_test_teardown(test_fw_bad_config, teardown),
+	    cmocka_unit_test_teardown(test_fw_store, teardown),
 	};
 	bool proc = argc > 1 && strcmp(argv[1], "--process") == 0;
 	if (fw_rig_init(argc > 0 ? argv[0] : NULL, "vsfw") < 0)

@@ -19,7 +19,9 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "../../firmware/config_keep.h"
 #include "../posix/config_xml.h"
+#include "../posix/filestore.h"
 #include "backend_cfg.h"
 #include "lhal.h"
 #include "../posix/rt.h"
@@ -61,6 +63,8 @@ typedef struct {
 	rt_stats_t st;
 	rt_clock_t clk;
 	alarm_log_t alarms; /* the list at the last look: its changes go to the log */
+	cfgkeep_t keep;	    /* the configuration changed at run time */
+	filestore_t store;  /* --store: where it is saved */
 } app_t;
 
 static app_t app;
@@ -212,6 +216,8 @@ static void usage(FILE *f)
 	      "                  IFACE (docs/can.md)\n"
 	      "  --node N        CAN node id, 1..127 (default 1)\n"
 	      "  --status-hz N   CAN status frame rate, 0 (off)..1000 (default 10)\n"
+	      "  --store FILE    keep the configuration changed at run time in FILE ($config\n"
+	      "                  save; read at start over the vehicle file; default: none)\n"
 	      "  --log stderr|syslog  where messages go (default stderr)\n"
 	      "  --rt-priority N SCHED_FIFO priority 1..99, 0 for none (default 80)\n"
 	      "  --help          this text\n",
@@ -219,7 +225,7 @@ static void usage(FILE *f)
 }
 
 typedef struct {
-	const char *config_path, *io_path, *port, *can_iface;
+	const char *config_path, *io_path, *port, *can_iface, *store_path;
 	unsigned long baud, prio, can_node, can_hz;
 	bool use_syslog;
 	char io_buf[1024];
@@ -250,7 +256,19 @@ static int number_opt(const char *name, const char *arg, unsigned long lo, unsig
 /* Returns -1 to go on, else the exit status. */
 static int parse_args(int argc, char **argv, opts_t *o)
 {
-	enum { O_CONFIG = 1, O_IO, O_PORT, O_BAUD, O_LOG, O_PRIO, O_HELP, O_CAN, O_NODE, O_HZ };
+	enum {
+		O_CONFIG = 1,
+		O_IO,
+		O_PORT,
+		O_BAUD,
+		O_LOG,
+		O_PRIO,
+		O_HELP,
+		O_CAN,
+		O_NODE,
+		O_HZ,
+		O_STORE
+	};
 	static const struct option opts[] = {
 	    {"config", required_argument, NULL, O_CONFIG},
 	    {"io", required_argument, NULL, O_IO},
@@ -262,6 +280,7 @@ static int parse_args(int argc, char **argv, opts_t *o)
 	    {"can", required_argument, NULL, O_CAN},
 	    {"node", required_argument, NULL, O_NODE},
 	    {"status-hz", required_argument, NULL, O_HZ},
+	    {"store", required_argument, NULL, O_STORE},
 	    {NULL, 0, NULL, 0},
 	};
 	int c, rc = 0;
@@ -278,6 +297,9 @@ static int parse_args(int argc, char **argv, opts_t *o)
 			break;
 		case O_CAN:
 			o->can_iface = optarg;
+			break;
+		case O_STORE:
+			o->store_path = optarg;
 			break;
 		case O_BAUD:
 			rc = number_opt("baud", optarg, 1, 4000000, &o->baud);
@@ -370,6 +392,17 @@ static int open_unit(app_t *a, const opts_t *o, backend_cfg_t *bk)
 		rt_log(LOG_ERR, "%s", err);
 		return -1;
 	}
+	if (o->store_path && filestore_open(&a->store, o->store_path, err, sizeof(err)) < 0) {
+		rt_log(LOG_ERR, "--store: %s", err);
+		return -1;
+	}
+	/* The vehicle file is the base; the store's overlay goes over it. */
+	cfgkeep_load(&a->keep, &cfg, o->store_path ? &a->store.hs : NULL, &cfg);
+	if (o->store_path) {
+		console_config_store(&a->keep, err, sizeof(err));
+		rt_log(a->keep.boot.result > CFGKEEP_BOOT_LOADED ? LOG_WARNING : LOG_INFO,
+		       "configuration %s (%s)", err, o->store_path);
+	}
 	if (lhal_open(&a->hal, bk, &io_map, vs_config_axes(&cfg), err, sizeof(err)) < 0) {
 		rt_log(LOG_ERR, "%s", err);
 		return -1;
@@ -383,6 +416,7 @@ static int open_unit(app_t *a, const opts_t *o, backend_cfg_t *bk)
 		lhal_close(&a->hal);
 		return -1;
 	}
+	cfgkeep_attach(&a->keep, &a->v);
 	rt_clock_start(&a->clk, 1000000u / cfg.tick_hz);
 	return 0;
 }
@@ -404,6 +438,7 @@ static int open_links(app_t *a, const opts_t *o)
 		fcntl(STDIN_FILENO, F_SETFL, fcntl(STDIN_FILENO, F_GETFL) | O_NONBLOCK);
 	}
 	server_init(&a->srv, &a->v, rt_extra, a, NULL, NULL);
+	console_set_keep(&a->srv.con, &a->keep);
 	vs_link_t lio = {port_read, port_write, a};
 	server_serve_serial(&a->srv, &a->ser, &lio);
 

@@ -32,7 +32,7 @@ typedef struct {
 } xml_field_t;
 
 static const xml_field_t fields[VS_CONFIG_NFIELDS] = {
-#define XML_FIELD(m, n, t, d, lo, hi, ex, el, at) {(el), (at), (lo), (hi), (ex)},
+#define XML_FIELD(m, n, t, d, lo, hi, ex, wh, el, at) {(el), (at), (lo), (hi), (ex)},
     VS_CONFIG_FIELDS(XML_FIELD)
 #undef XML_FIELD
 };
