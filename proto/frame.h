@@ -112,6 +112,9 @@ static inline bool frame_rx_busy(const frame_rx_t *rx)
  * out. A request repeating the sequence number and check value of the last
  * executed one is answered from the cache without running it again. */
 typedef void (*frame_write_fn)(void *ctx, const uint8_t *data, size_t n);
+/* Runs one console line (WIRE_OP_CONSOLE): false when it gets no reply
+ * (blank, comment), else the reply line in reply. */
+typedef bool (*frame_line_fn)(void *ctx, const char *line, char *reply, size_t cap);
 
 typedef struct {
 	uint32_t executed;   /* requests run */
@@ -125,6 +128,8 @@ typedef struct {
 	uint8_t rxbuf[FRAME_REQ_MAX];
 	frame_write_fn write;
 	void *wctx;
+	frame_line_fn line; /* WIRE_OP_CONSOLE; NULL: NAK opcode */
+	void *lctx;
 	bool have_last;
 	uint8_t last_seq, last_op;
 	uint16_t last_crc;
@@ -137,6 +142,12 @@ typedef struct {
  * receiver itself; may be NULL. */
 void frame_srv_init(frame_srv_t *s, vehicle_t *v, frame_write_fn write, void *wctx,
 		    frame_other_fn on_other, void *octx);
+/* Console lines carried in frames (WIRE_OP_CONSOLE) go to fn. */
+static inline void frame_srv_set_line(frame_srv_t *s, frame_line_fn fn, void *ctx)
+{
+	s->line = fn;
+	s->lctx = ctx;
+}
 static inline void frame_srv_feed(frame_srv_t *s, const uint8_t *data, size_t n, uint32_t now_ms)
 {
 	frame_rx_feed(&s->rx, data, n, now_ms);

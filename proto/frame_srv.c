@@ -16,6 +16,33 @@ static void srv_nak(frame_srv_t *s, uint8_t seq, uint8_t op, int status)
 		s->write(s->wctx, out, n);
 }
 
+/* A console line in a frame: NAK value unless it is one line of 1..64
+ * bytes without NUL; the reply's bytes are the answer. */
+static size_t run_line(frame_srv_t *s, const frame_t *f, uint8_t *resp, size_t cap, int *st)
+{
+	char line[FRAME_REQ_PAYLOAD_MAX + 1];
+	if (!s->line) {
+		*st = WIRE_ST_OPCODE;
+		return 0;
+	}
+	if (f->len == 0 || f->len > FRAME_REQ_PAYLOAD_MAX) {
+		*st = WIRE_ST_VALUE;
+		return 0;
+	}
+	for (size_t i = 0; i < f->len; i++) {
+		uint8_t b = f->payload[i];
+		if (b == 0 || b == '\r' || b == '\n') {
+			*st = WIRE_ST_VALUE;
+			return 0;
+		}
+		line[i] = (char)b;
+	}
+	line[f->len] = '\0';
+	if (!s->line(s->lctx, line, (char *)resp, cap))
+		return 0;
+	return strnlen((const char *)resp, cap);
+}
+
 static void srv_frame(void *ctx, const frame_t *f)
 {
 	frame_srv_t *s = ctx;
@@ -42,7 +69,10 @@ static void srv_frame(void *ctx, const frame_t *f)
 			s->write(s->wctx, s->last_resp, s->last_len);
 		return;
 	}
-	n = wire_dispatch(s->v, f->op, f->payload, f->len, resp, sizeof(resp), &st);
+	if (f->op == WIRE_OP_CONSOLE)
+		n = run_line(s, f, resp, sizeof(resp), &st);
+	else
+		n = wire_dispatch(s->v, f->op, f->payload, f->len, resp, sizeof(resp), &st);
 	if (st != WIRE_ST_OK) {
 		srv_nak(s, f->seq, f->op, st);
 		return;

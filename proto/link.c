@@ -36,6 +36,11 @@ static bool link_extra(void *ctx, int argc, char **argv, char *reply, size_t cap
 	return l->next_extra ? l->next_extra(l->next_xctx, argc, argv, reply, cap) : false;
 }
 
+static bool link_line(void *ctx, const char *line, char *reply, size_t cap)
+{
+	return console_exec(ctx, line, reply, cap);
+}
+
 void link_init(link_t *l, console_t *con, const vs_link_t *io)
 {
 	memset(l, 0, sizeof(*l));
@@ -48,4 +53,5 @@ void link_init(link_t *l, console_t *con, const vs_link_t *io)
 	console_set_extra(con, link_extra, l);
 	frame_srv_init(&l->fs, con->v, port_send, &l->port, console_rx, con);
 	frame_rx_set_hold(&l->fs.rx, console_holds_sync, con);
+	frame_srv_set_line(&l->fs, link_line, con);
 }

@@ -42,6 +42,12 @@
  *   u16 largest request payload, u16 largest response payload. */
 #define WIRE_OP_INFO  0x7F
 #define WIRE_INFO_LEN 8
+/* Not an operation: one console line (docs/console.md) carried in a frame,
+ * for the bring-up extras ($config, ...) that have no opcode. Request
+ * payload: the line's bytes, 1..64, no line ending; response payload: the
+ * reply line's bytes ("ok ..." or "error ..."), no newline; empty for a
+ * blank line or a comment. Serial frames only (not CAN). */
+#define WIRE_OP_CONSOLE 0x7E
 
 /* Status of a request: 0 accepted, else the reason it was refused (NAK). */
 typedef enum {

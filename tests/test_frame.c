@@ -638,6 +638,55 @@ static void test_doc_examples(void **state)
 	assert_int_equal(f->payload[4], CMD_COUNT);
 }
 
+static bool run_line(void *ctx, const char *line, char *reply, size_t cap)
+{
+	return console_exec(ctx, line, reply, cap);
+}
+
+/* Console lines in frames (WIRE_OP_CONSOLE): the documented exchange byte
+ * for byte, the NAKs, a retransmission answered from the cache. */
+static void test_server_console_line(void **state)
+{
+	static frame_srv_t fs;
+	uint8_t req[64], resp[64];
+	(void)state;
+	boot();
+	frame_srv_init(&fs, &S.vehicle, out_write, NULL, NULL, NULL);
+	send(&fs, 1, WIRE_OP_CONSOLE, (const uint8_t *)"$version", 8);
+	assert_int_equal(NOUT, 8);
+	assert_memory_equal(OUT, ((const uint8_t[]){0xA5, 1, 0, 1, 0xFE, WIRE_ST_OPCODE}), 6);
+	frame_srv_set_line(&fs, run_line, &S.srv.con);
+	size_t nreq = doc_example("$config tick_hz request, seq 0x08", req, sizeof(req));
+	size_t nresp = doc_example("its response: \"ok tick_hz 1000\"", resp, sizeof(resp));
+	NOUT = 0;
+	frame_srv_feed(&fs, req, nreq, 0);
+	assert_int_equal(NOUT, nresp);
+	assert_memory_equal(OUT, resp, nresp);
+	/* an error reply is the answer's payload too */
+	send(&fs, 2, WIRE_OP_CONSOLE, (const uint8_t *)"$config nosuch", 14);
+	assert_int_equal(NOUT, 7 + 1 + 32);
+	assert_memory_equal(OUT + 6, "error 8 $config: no field nosuch", 32);
+	/* a comment: an empty answer */
+	send(&fs, 3, WIRE_OP_CONSOLE, (const uint8_t *)"# note", 6);
+	assert_int_equal(NOUT, 8);
+	assert_int_equal(OUT[5], WIRE_ST_OK);
+	/* once, however often it is sent again */
+	send(&fs, 4, WIRE_OP_CONSOLE, (const uint8_t *)"$watchdog 300", 13);
+	assert_int_equal(fs.st.executed, 4);
+	send(&fs, 4, WIRE_OP_CONSOLE, (const uint8_t *)"$watchdog 300", 13);
+	assert_int_equal(fs.st.executed, 4);
+	assert_int_equal(fs.st.duplicates, 1);
+	assert_memory_equal(OUT + 6, "ok watchdog 300", 15);
+	/* not one line of 1..64 bytes: NAK value */
+	send(&fs, 5, WIRE_OP_CONSOLE, NULL, 0);
+	assert_int_equal(OUT[5], WIRE_ST_VALUE);
+	send(&fs, 6, WIRE_OP_CONSOLE, (const uint8_t *)"getState\nstop", 13);
+	assert_int_equal(OUT[5], WIRE_ST_VALUE);
+	send(&fs, 7, WIRE_OP_CONSOLE, (const uint8_t *)"get\0State", 9);
+	assert_int_equal(OUT[5], WIRE_ST_VALUE);
+	assert_int_equal(fs.st.executed, 4);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -651,6 +700,7 @@ int main(void)
 	    cmocka_unit_test(test_rx_events_per_byte_bounded),
 	    cmocka_unit_test(test_server_naks_echo_seq),
 	    cmocka_unit_test(test_server_duplicates),
+	    cmocka_unit_test(test_server_console_line),
 	    cmocka_unit_test(test_doc_opcode_table),
 	    cmocka_unit_test(test_doc_examples),
 	};

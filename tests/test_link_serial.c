@@ -1424,6 +1424,53 @@ static void test_vehiclectl(void **state)
 	stop_sim();
 }
 
+/* vehiclectl config: $config over frames (WIRE_OP_CONSOLE) and over the
+ * console, the unit's reply printed; exit 1 for a refusal. */
+static void test_vehiclectl_config(void **state)
+{
+	static char out[4096];
+	(void)state;
+	start_sim();
+	sim_line("$watchdog 0\n", "ok watchdog 0\n");
+	assert_int_equal(ctl(out, sizeof(out), "--port %s config wheel_diameter_mm", PTY_PATH), 0);
+	assert_string_equal(out, "ok wheel_diameter_mm 150.000\n");
+	assert_int_equal(ctl(out, sizeof(out), "--port %s config wheel_diameter_mm 160", PTY_PATH),
+			 0);
+	assert_string_equal(out, "ok wheel_diameter_mm 160.000\n");
+	assert_int_equal(ctl(out, sizeof(out), "--port %s config tick_hz 500", PTY_PATH), 0);
+	assert_string_equal(out, "ok tick_hz 1000 pending 500\n");
+	assert_int_equal(ctl(out, sizeof(out), "--port %s --console config diff", PTY_PATH), 0);
+	/* $watchdog 0 changed link_timeout_ms for the run */
+	assert_string_equal(out, "ok unsaved 3 tick_hz wheel_diameter_mm link_timeout_ms changed 3 "
+				 "tick_hz wheel_diameter_mm link_timeout_ms pending 1 tick_hz\n");
+	assert_int_equal(ctl(out, sizeof(out), "--port %s config save", PTY_PATH), 1);
+	assert_string_equal(out, "error 8 $config save: this unit has no store\n");
+	assert_int_equal(ctl(out, sizeof(out), "--port %s --json config store", PTY_PATH), 0);
+	assert_string_equal(out, "{\"ok\": true, \"reply\": \"ok store none table "
+				 "0x916B11C3\"}\n");
+	assert_int_equal(ctl(out, sizeof(out), "--port %s setPower true", PTY_PATH), 0);
+	assert_int_equal(ctl(out, sizeof(out), "--port %s setServo true", PTY_PATH), 0);
+	assert_int_equal(
+	    ctl(out, sizeof(out), "--port %s --console config wheel_diameter_mm 170", PTY_PATH), 1);
+	assert_string_equal(out, "error 8 $config wheel_diameter_mm: wheel_diameter_mm changes "
+				 "only with the servo off and no motion queued\n");
+	assert_int_equal(ctl(out, sizeof(out), "--port %s config defaults", PTY_PATH), 1);
+	assert_string_equal(out, "error 8 $config defaults: wheel_diameter_mm changes only with "
+				 "the servo off and no motion queued\n");
+	assert_int_equal(ctl(out, sizeof(out), "--port %s setServo false", PTY_PATH), 0);
+	assert_int_equal(ctl(out, sizeof(out), "--port %s config defaults", PTY_PATH), 0);
+	assert_string_equal(out, "ok defaults pending 0\n");
+	sim_line("$watchdog 0\n", "ok watchdog 0\n");
+	/* a line over what a frame carries */
+	assert_int_equal(ctl(out, sizeof(out),
+			     "--port %s config drive_lag_ms 1.000000000 2.000000000 3.000000000 "
+			     "4.000000000",
+			     PTY_PATH),
+			 2);
+	assert_string_equal(out, "vehiclectl: config: a line of at most 64 bytes\n");
+	stop_sim();
+}
+
 /* vehiclectl wait and --wait, after a refused request left warning 111:
  * done when the move has ended (exit 0), stopped short by a fault (exit 1),
  * not done within --wait-limit (exit 4). */
@@ -1665,6 +1712,7 @@ int main(int argc, char **argv)
 	    cmocka_unit_test_setup_teardown(test_sim_long_comment, fake_setup, sim_teardown),
 	    cmocka_unit_test(test_client_timeout),
 	    cmocka_unit_test(test_vehiclectl),
+	    cmocka_unit_test(test_vehiclectl_config),
 	    cmocka_unit_test_teardown(test_vehiclectl_wait, sim_teardown),
 	    cmocka_unit_test_teardown(test_link_watchdog_host_killed, sim_teardown),
 	};

@@ -37,31 +37,35 @@ static void on_signal(int sig)
 
 static void usage(FILE *f)
 {
-	fputs("usage: vehiclectl LINK [options] COMMAND [ARGS...]\n"
-	      "links:\n"
-	      "  --port DEV      serial port, binary frames (docs/protocol.md)\n"
-	      "  --baud N        line speed (default 115200)\n"
-	      "  --console       speak the text console on the port instead of frames\n"
-	      "  --can IFACE     SocketCAN interface (docs/can.md)\n"
-	      "  --node N        CAN node id of the unit (default 1)\n"
-	      "options:\n"
-	      "  --json          one JSON object per answer\n"
-	      "  --timeout MS    per attempt (default 500)\n"
-	      "  --retries N     further attempts after a timeout (default 2)\n"
-	      "  --wait          after an operation that returned true, wait as 'wait' does\n"
-	      "  --wait-limit S  longest wait, seconds (default 300)\n"
-	      "commands:\n"
-	      "  OPERATION ARGS  any operation of the command table (see 'help')\n"
-	      "  help [OP]       the operations, or one with its arguments\n"
-	      "  info            protocol version and command table checksum of the unit\n"
-	      "  wait            until the unit is done: Ready, or Warning-### while idle\n"
-	      "                  (exit 0); a fault, Locked, Stuck, servo or power off (exit 1);\n"
-	      "                  still busy or paused after --wait-limit (exit 4)\n"
-	      "  watch [--count N] [--interval MS]\n"
-	      "                  state, pose, speed, battery and alarms until Ctrl-C\n"
-	      "  record FILE --duration S [--interval MS]\n"
-	      "                  the same as CSV rows into FILE\n",
-	      f);
+	fputs(
+	    "usage: vehiclectl LINK [options] COMMAND [ARGS...]\n"
+	    "links:\n"
+	    "  --port DEV      serial port, binary frames (docs/protocol.md)\n"
+	    "  --baud N        line speed (default 115200)\n"
+	    "  --console       speak the text console on the port instead of frames\n"
+	    "  --can IFACE     SocketCAN interface (docs/can.md)\n"
+	    "  --node N        CAN node id of the unit (default 1)\n"
+	    "options:\n"
+	    "  --json          one JSON object per answer\n"
+	    "  --timeout MS    per attempt (default 500)\n"
+	    "  --retries N     further attempts after a timeout (default 2)\n"
+	    "  --wait          after an operation that returned true, wait as 'wait' does\n"
+	    "  --wait-limit S  longest wait, seconds (default 300)\n"
+	    "commands:\n"
+	    "  OPERATION ARGS  any operation of the command table (see 'help')\n"
+	    "  help [OP]       the operations, or one with its arguments\n"
+	    "  info            protocol version and command table checksum of the unit\n"
+	    "  wait            until the unit is done: Ready, or Warning-### while idle\n"
+	    "                  (exit 0); a fault, Locked, Stuck, servo or power off (exit 1);\n"
+	    "                  still busy or paused after --wait-limit (exit 4)\n"
+	    "  watch [--count N] [--interval MS]\n"
+	    "                  state, pose, speed, battery and alarms until Ctrl-C\n"
+	    "  record FILE --duration S [--interval MS]\n"
+	    "                  the same as CSV rows into FILE\n"
+	    "  config [NAME [VALUE...] | NAME[K] VALUE | diff | save | defaults | reload | store]\n"
+	    "                  the unit's $config (docs/console.md): prints its reply; exit 0\n"
+	    "                  on ok, 1 when the unit refused (error ...)\n",
+	    f);
 }
 
 static void print_help_op(const cmd_def_t *d)
@@ -246,6 +250,38 @@ static int cmd_op(vc_client_t *c, const cmd_def_t *d, int argc, char **argv, boo
 		return report_err(c, e);
 	print_result(d, r, out, json);
 	return r ? 0 : 1;
+}
+
+/* config ARGS: the console line "$config ARGS" run by the unit. */
+static int cmd_config(vc_client_t *c, int argc, char **argv, bool json)
+{
+	char line[128], reply[1100];
+	size_t n = (size_t)snprintf(line, sizeof(line), "$config");
+	for (int i = 1; i < argc && n < sizeof(line); i++)
+		n += (size_t)snprintf(line + n, sizeof(line) - n, " %s", argv[i]);
+	if (n >= sizeof(line)) {
+		fprintf(stderr, "vehiclectl: config: line too long\n");
+		return 2;
+	}
+	int e = vc_console_line(c, line, reply, sizeof(reply));
+	if (e == VC_E_ARG) {
+		fprintf(stderr, "vehiclectl: config: a line of at most 64 bytes\n");
+		return 2;
+	}
+	if (e != VC_OK) {
+		fprintf(stderr, "vehiclectl: config: %s\n", vc_strerror(e));
+		return 3;
+	}
+	bool ok = strncmp(reply, "ok", 2) == 0;
+	if (json) {
+		printf("{\"ok\": %s, \"reply\": \"", ok ? "true" : "false");
+		for (const char *p = reply; *p; p++)
+			printf(*p == '"' || *p == '\\' ? "\\%c" : "%c", *p);
+		printf("\"}\n");
+	} else {
+		printf("%s\n", reply);
+	}
+	return ok ? 0 : 1;
 }
 
 static int cmd_info(vc_client_t *c, bool json)
@@ -560,7 +596,8 @@ int main(int argc, char **argv)
 	if (strcmp(argv[0], "help") == 0)
 		return cmd_help(argc, argv);
 	if (strcmp(argv[0], "info") != 0 && strcmp(argv[0], "watch") != 0 &&
-	    strcmp(argv[0], "record") != 0 && strcmp(argv[0], "wait") != 0) {
+	    strcmp(argv[0], "record") != 0 && strcmp(argv[0], "wait") != 0 &&
+	    strcmp(argv[0], "config") != 0) {
 		d = cmd_by_name(argv[0]);
 		if (!d) {
 			fprintf(stderr, "vehiclectl: no operation %s (try 'vehiclectl help')\n",
@@ -613,6 +650,8 @@ int main(int argc, char **argv)
 		rc = cmd_wait(c, wait_limit, json);
 	} else if (strcmp(argv[0], "info") == 0) {
 		rc = cmd_info(c, json);
+	} else if (strcmp(argv[0], "config") == 0) {
+		rc = cmd_config(c, argc, argv, json);
 	} else {
 		rc = loop_cmd(c, argc, argv, json, strcmp(argv[0], "record") == 0);
 	}

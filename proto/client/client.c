@@ -110,6 +110,21 @@ int vc_info(vc_client_t *c, unsigned *proto_version, uint16_t *table_crc, unsign
 	return VC_OK;
 }
 
+int vc_console_line(vc_client_t *c, const char *line, char *reply, size_t cap)
+{
+	size_t len = strlen(line), n = 0;
+	if (len == 0 || len > 64 || strpbrk(line, "\r\n") || cap == 0)
+		return VC_E_ARG;
+	int e = exchange(c, WIRE_OP_CONSOLE, (const uint8_t *)line, len, &n);
+	if (e != VC_OK)
+		return e;
+	if (n >= cap)
+		n = cap - 1;
+	memcpy(reply, c->resp, n);
+	reply[n] = '\0';
+	return VC_OK;
+}
+
 /* One operation by opcode; out[] is filled only on success. */
 static int run(vc_client_t *c, unsigned op, bool *ret, const cmd_value_t *in, cmd_value_t *out)
 {

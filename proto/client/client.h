@@ -109,6 +109,13 @@ int vc_call(vc_client_t *c, const cmd_def_t *d, const cmd_value_t in[], bool *re
 /* Protocol version, table checksum and operation count of the unit
  * (WIRE_OP_INFO; over the console, "$version"). */
 int vc_info(vc_client_t *c, unsigned *proto_version, uint16_t *table_crc, unsigned *ops);
+/* One console line run by the unit (docs/console.md: the bring-up extras,
+ * $config ...), its reply line into reply (cap bytes, "" when the line gets
+ * none): over frames as WIRE_OP_CONSOLE (at most 64 bytes), over the
+ * console as the line itself; CAN has no such request (VC_E_NAK). VC_OK
+ * whatever the reply says ("ok ..." or "error ..."); VC_E_ARG for a line
+ * over 64 bytes or with a line ending. */
+int vc_console_line(vc_client_t *c, const char *line, char *reply, size_t cap);
 
 /* The operations, in spec order. */
 int vc_clearAlarm(vc_client_t *c, bool *ret);

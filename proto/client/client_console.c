@@ -196,6 +196,9 @@ static int build_line(unsigned opcode, const uint8_t *req, size_t req_len, char 
 	*len = 0;
 	if (opcode == WIRE_OP_INFO)
 		return put(line, cap, len, "$version\n") ? VC_OK : VC_E_ARG;
+	if (opcode == WIRE_OP_CONSOLE)
+		return put(line, cap, len, "%.*s\n", (int)req_len, (const char *)req) ? VC_OK
+										      : VC_E_ARG;
 	d = cmd_by_opcode(opcode);
 	if (!d || wire_decode_request(d, req, req_len, in, &st) != WIRE_ST_OK)
 		return VC_E_ARG;
@@ -268,6 +271,16 @@ static int parse_reply(con_t *s, unsigned opcode, uint8_t *resp, size_t cap, siz
 	char tok[16];
 	bool r;
 
+	if (opcode == WIRE_OP_CONSOLE) {
+		/* the reply line itself, as a frame carries it */
+		size_t n = strnlen(p, cap + 1);
+		if (n > cap)
+			return VC_E_PROTO;
+		for (size_t i = 0; i < n; i++)
+			resp[i] = (uint8_t)p[i];
+		*resp_len = n;
+		return VC_OK;
+	}
 	if (strncmp(p, "error ", 6) == 0) {
 		long code = strtol(p + 6, NULL, 10);
 

@@ -12,9 +12,9 @@ import math
 import time
 from typing import Generic, List, NamedTuple, TypeVar
 
-from .errors import MotionStopped, ProtocolError, WaitTimeout
-from .ops import (ALARM_TYPES, OPERATIONS, PROTOCOL_VERSION, AlarmType, decode_info, decode_outs,
-                  encode_args, table_crc)
+from .errors import ConsoleError, MotionStopped, ProtocolError, WaitTimeout
+from .ops import (ALARM_TYPES, OP_CONSOLE, OPERATIONS, PROTOCOL_VERSION, AlarmType, decode_info,
+                  decode_outs, encode_args, table_crc)
 from .transport import CanTransport, ConsoleTransport, FrameTransport
 
 T = TypeVar("T")
@@ -185,6 +185,35 @@ class Vehicle:
             line = " ".join([name] + [_console_value(c, v) for c, v in zip(ins, args)])
             return _parse_console(outs, self.transport.command(line))
         return decode_outs(outs, self.transport.exchange(opcode, encode_args(ins, args)))
+
+    def console_line(self, line: str) -> str:
+        """Runs one console line (docs/console.md: a bring-up extra such
+        as ``$config ...``) and returns its reply after "ok " ("" for a
+        bare "ok"); raises ConsoleError for "error ...". Over frames the
+        line travels in a console frame (at most 64 bytes); CAN has none
+        (NakError)."""
+        if "\n" in line or "\r" in line or not line:
+            raise ValueError("one line")
+        if self.console:
+            return self.transport.command(line)
+        data = line.encode("ascii")
+        if len(data) > 64:
+            raise ValueError("a console line in a frame has at most 64 bytes")
+        reply = self.transport.exchange(OP_CONSOLE, data).decode("ascii", "backslashreplace")
+        if reply == "ok" or reply.startswith("ok "):
+            return reply[3:]
+        if reply.startswith("error "):
+            code, _, msg = reply[6:].partition(" ")
+            raise ConsoleError(int(code), msg)
+        raise ProtocolError("reply %r" % reply)
+
+    def config(self, *args) -> str:
+        """``$config ARGS``: a field's value (``config("tick_hz")``), a
+        change (``config("wheel_diameter_mm", 160)``, ``config("drive_lag_ms[1]",
+        25)``), ``config("diff")``, ``"save"``, ``"defaults"``, ``"reload"``,
+        ``"store"``; the reply after "ok " (docs/console.md), ConsoleError
+        for a refusal."""
+        return self.console_line(" ".join(["$config"] + [str(a) for a in args]))
 
     def _ok(self, name, *args) -> bool:
         return self.call(name, *args)[0]

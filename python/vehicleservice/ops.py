@@ -11,6 +11,8 @@ from .errors import ProtocolError
 
 PROTOCOL_VERSION = 1
 OP_INFO = 0x7F
+# one console line in a frame (docs/protocol.md): the bring-up extras
+OP_CONSOLE = 0x7E
 
 # name: (opcode, in types, out types), from the opcode table of docs/protocol.md
 OPERATIONS = {
