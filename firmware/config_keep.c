@@ -206,6 +206,9 @@ cfgkeep_result_t cfgkeep_save(cfgkeep_t *k, const char **field)
 
 bool cfgkeep_pending(const cfgkeep_t *k, const vs_config_field_t *f)
 {
+	/* an ANY row is in force at once ($watchdog, $jerk set it unseen) */
+	if (f->when == VS_CFG_WHEN_ANY)
+		return false;
 	return !row_same(&k->want, &k->v->cfg, f);
 }
 

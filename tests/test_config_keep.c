@@ -155,6 +155,7 @@ static void test_when_and_refusals(void **state)
 	EXPECT("$jerk", "ok jerk 2000.000 0.000 limit 0.000 0.000");
 	/* $watchdog's change is the wanted one too */
 	EXPECT("$watchdog 400", "ok watchdog 400");
+	EXPECT("$config link_timeout_ms", "ok link_timeout_ms 400");
 	EXPECT("$config diff", "ok unsaved 3 jerk_default_t_mm_s3 link_timeout_ms battery_low_v "
 			       "changed 3 jerk_default_t_mm_s3 link_timeout_ms battery_low_v "
 			       "pending 0");
