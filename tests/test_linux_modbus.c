@@ -902,6 +902,12 @@ static uint16_t raw_reg(modbus_t *m, int unit, int addr, bool input)
 	return v;
 }
 
+/* A 32-bit count from its high and low word registers. */
+static int32_t raw_reg32(modbus_t *m, int unit, int hi, int lo, bool input)
+{
+	return (int32_t)((uint32_t)raw_reg(m, unit, hi, input) << 16 | raw_reg(m, unit, lo, input));
+}
+
 /* vehicle-fw killed mid-move (SIGKILL: nothing written at exit): each drive
  * stops by itself when no request came for its communication timeout,
  * which vehicle-fw wrote at start. */
@@ -979,12 +985,8 @@ static void test_zlac8015d_registers(void **state)
 	assert_int_equal(raw_reg(m, 1, 0x200E, false), 7);
 	assert_int_equal(raw_reg(m, 1, 0x2088, false), 0);
 	assert_int_equal(raw_reg(m, 1, 0x2089, false), 0);
-	int32_t left =
-	    (int32_t)((uint32_t)raw_reg(m, 1, 0x20A7, false) << 16 | raw_reg(m, 1, 0x20A8, false));
-	int32_t right =
-	    (int32_t)((uint32_t)raw_reg(m, 1, 0x20A9, false) << 16 | raw_reg(m, 1, 0x20AA, false));
-	assert_travel(left);
-	assert_travel(-right);
+	assert_travel(raw_reg32(m, 1, 0x20A7, 0x20A8, false));
+	assert_travel(-raw_reg32(m, 1, 0x20A9, 0x20AA, false));
 	modbus_close(m);
 	modbus_free(m);
 }
@@ -1003,12 +1005,8 @@ static void test_defined_profile_registers(void **state)
 		assert_int_equal(raw_reg(m, unit, 0x40, false), 0);
 		assert_int_equal(raw_reg(m, unit, 0x20, false), 0); /* stage off */
 	}
-	int32_t p1 =
-	    (int32_t)((uint32_t)raw_reg(m, 1, 0x31, true) << 16 | raw_reg(m, 1, 0x30, true));
-	int32_t p2 =
-	    (int32_t)((uint32_t)raw_reg(m, 2, 0x31, true) << 16 | raw_reg(m, 2, 0x30, true));
-	assert_travel(p1);
-	assert_travel(-p2);
+	assert_travel(raw_reg32(m, 1, 0x31, 0x30, true));
+	assert_travel(-raw_reg32(m, 2, 0x31, 0x30, true));
 	modbus_close(m);
 	modbus_free(m);
 }
