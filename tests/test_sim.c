@@ -281,6 +281,17 @@ static void hires_resolution_follows_the_limits(void **state)
 	assert_int_equal(plant_hires_counts_per_rev(&cfg), 1u << 20);
 }
 
+/* What a shell line prints (stdout and what it redirects), which must
+ * exit 0. */
+static void run_shell(const char *cmd, char *out, size_t cap)
+{
+	FILE *f = popen(cmd, "r");
+	assert_non_null(f);
+	size_t n = fread(out, 1, cap - 1, f);
+	out[n] = '\0';
+	assert_int_equal(pclose(f), 0);
+}
+
 /* The mecanum base of config/vehicle-omni.xml on the ideal plant moves
  * diagonally and turns to the exact pose, in-process and through
  * vehicle-sim --ideal. */
@@ -314,11 +325,7 @@ static void omni_config_on_ideal_plant(void **state)
 		 "0\\n$wait 3000\\nmoveTurn 90\\n$wait 3000\\ngetPosition\\n' | %s/vehicle-sim "
 		 "--fast --ideal --config config/vehicle-omni.xml --io config/io.xml 2>&1",
 		 BUILD_DIR);
-	FILE *f = popen(cmd, "r");
-	assert_non_null(f);
-	size_t n = fread(out, 1, sizeof(out) - 1, f);
-	out[n] = '\0';
-	assert_int_equal(pclose(f), 0);
+	run_shell(cmd, out, sizeof out);
 	const char *want =
 	    "vehicle-sim: mecanum base, 4 axes, 1000 Hz, ideal plant, 524288-count encoders, fast "
 	    "mode (config/vehicle-omni.xml, config/io.xml)\n"
@@ -342,11 +349,7 @@ static void sim_logs_alarm_events(void **state)
 	    "clearAlarm\\n$wait 10\\nsetVelocity 0 1\\n$wait 10\\n' | %s/vehicle-sim --fast "
 	    "--config config/vehicle.xml --io config/io.xml 2>&1 >/dev/null",
 	    BUILD_DIR);
-	FILE *f = popen(cmd, "r");
-	assert_non_null(f);
-	size_t n = fread(out, 1, sizeof(out) - 1, f);
-	out[n] = '\0';
-	assert_int_equal(pclose(f), 0);
+	run_shell(cmd, out, sizeof out);
 	const char *want =
 	    "vehicle-sim: differential base, 2 axes, 1000 Hz, fast mode (config/vehicle.xml, "
 	    "config/io.xml)\n"
