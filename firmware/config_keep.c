@@ -8,12 +8,27 @@ _Static_assert(CFGKEEP_PAYLOAD_MAX >= 4 + VS_CONFIG_NFIELDS * (1 + 24 + 3) +
 					  (sizeof(vs_config_t) - sizeof(((vs_config_t *)0)->io)),
 	       "every field fits the saved form's buffer");
 
+/* Every row lies in the keeper's rows (CFGKEEP_ROWS_BYTES). */
+#define ROW_IN_ROWS(m, ...)                                                                        \
+	_Static_assert(offsetof(vs_config_t, m) + sizeof(((vs_config_t *)0)->m) <=                 \
+			   CFGKEEP_ROWS_BYTES,                                                     \
+		       #m " lies in the keeper's rows");
+VS_CONFIG_FIELDS(ROW_IN_ROWS)
+#undef ROW_IN_ROWS
+
+/* The RESTART rows' bytes together (what commit sets aside). */
+#define RESTART_ROW_BYTES(m, n, type, dflt, lo, hi, excl, when, ...)                               \
+	+(VS_CFG_WHEN_##when == VS_CFG_WHEN_RESTART ? sizeof(((vs_config_t *)0)->m) : 0u)
+enum { RESTART_BYTES = 0 VS_CONFIG_FIELDS(RESTART_ROW_BYTES) };
+#undef RESTART_ROW_BYTES
+
 static uint32_t row_bytes(const vs_config_field_t *f)
 {
 	return (uint32_t)f->n * vs_config_type_size(f->type);
 }
 
-static bool row_same(const vs_config_t *a, const vs_config_t *b, const vs_config_field_t *f)
+/* a and b: a configuration or its rows (each row at its offset). */
+static bool row_same(const void *a, const void *b, const vs_config_field_t *f)
 {
 	const uint8_t *x = (const uint8_t *)a + f->off, *y = (const uint8_t *)b + f->off;
 	for (uint32_t i = 0; i < row_bytes(f); i++)
@@ -22,7 +37,7 @@ static bool row_same(const vs_config_t *a, const vs_config_t *b, const vs_config
 	return true;
 }
 
-static void row_copy(vs_config_t *to, const vs_config_t *from, const vs_config_field_t *f)
+static void row_copy(void *to, const void *from, const vs_config_field_t *f)
 {
 	uint8_t *d = (uint8_t *)to + f->off;
 	const uint8_t *s = (const uint8_t *)from + f->off;
@@ -30,9 +45,9 @@ static void row_copy(vs_config_t *to, const vs_config_t *from, const vs_config_f
 		d[i] = s[i];
 }
 
-/* Every row of from into to (the rest of to, io.xml and the version,
- * stays). */
-static void rows_copy(vs_config_t *to, const vs_config_t *from)
+/* Every row of from into to (the rest of a configuration, io.xml and the
+ * version, stays). */
+static void rows_copy(void *to, const void *from)
 {
 	for (unsigned i = 0; i < VS_CONFIG_NFIELDS; i++)
 		row_copy(to, from, &vs_config_fields[i]);
@@ -40,8 +55,9 @@ static void rows_copy(vs_config_t *to, const vs_config_t *from)
 
 static cfgkeep_boot_result_t load_record(cfgkeep_t *k, vs_config_t *start)
 {
+	uint8_t buf[CFGKEEP_PAYLOAD_MAX]; /* at start: the stack is free */
 	cfgstore_info_t info = {0};
-	cfgstore_status_t st = cfgstore_load(k->store, k->buf, sizeof k->buf, &info);
+	cfgstore_status_t st = cfgstore_load(k->store, buf, sizeof buf, &info);
 	k->boot.other_torn = info.other_torn;
 	if (st == CFGSTORE_EMPTY)
 		return CFGKEEP_BOOT_EMPTY;
@@ -52,7 +68,7 @@ static cfgkeep_boot_result_t load_record(cfgkeep_t *k, vs_config_t *start)
 	k->boot.seq = info.seq;
 	k->boot.schema = info.schema;
 	vs_config_decode_t d;
-	vs_config_decode_status_t ds = vs_config_decode(start, k->buf, info.len, &d);
+	vs_config_decode_status_t ds = vs_config_decode(start, buf, info.len, &d);
 	k->boot.applied = d.applied;
 	k->boot.dropped = d.dropped;
 	if (ds != VS_CFGSAVE_OK)
@@ -68,15 +84,15 @@ void cfgkeep_load(cfgkeep_t *k, const vs_config_t *base, const hal_store_t *stor
 	k->v = NULL;
 	k->store = store;
 	k->boot = (cfgkeep_boot_t){0};
-	k->base = *base;
+	rows_copy(&k->base, base);
 	*start = *base;
 	if (store) {
 		k->boot.result = (uint8_t)load_record(k, start);
 		if (k->boot.result != CFGKEEP_BOOT_LOADED)
 			*start = *base; /* never a part of an unreadable record */
 	}
-	k->saved = *start;
-	k->want = *start;
+	rows_copy(&k->saved, start);
+	rows_copy(&k->want, start);
 }
 
 void cfgkeep_attach(cfgkeep_t *k, vehicle_t *v)
@@ -102,8 +118,8 @@ void cfgkeep_attach(cfgkeep_t *k, vehicle_t *v)
 }
 
 /* The RESTART rows' bytes, one after another, between a configuration
- * and buf (to_buf: out of c). */
-static void restart_rows(vs_config_t *c, uint8_t *buf, bool to_buf)
+ * (or its rows) and buf (to_buf: out of c). */
+static void restart_rows(void *c, uint8_t *buf, bool to_buf)
 {
 	uint32_t at = 0;
 	for (unsigned i = 0; i < VS_CONFIG_NFIELDS; i++) {
@@ -120,17 +136,18 @@ static void restart_rows(vs_config_t *c, uint8_t *buf, bool to_buf)
 	}
 }
 
-/* k->cand becomes the wanted configuration, if vs_config_check takes it
- * and, with the running values of its RESTART rows, the running one. */
-static cfgkeep_result_t commit(cfgkeep_t *k, const char **field)
+/* cand becomes the wanted configuration, if vs_config_check takes it and,
+ * with the running values of its RESTART rows, the running one. */
+static cfgkeep_result_t commit(cfgkeep_t *k, vs_config_t *cand, const char **field)
 {
 	vehicle_t *v = k->v;
 	bool off = false, live = false;
-	if (vs_config_check(&k->cand, field) != 0)
+	uint8_t wanted[RESTART_BYTES], running[RESTART_BYTES];
+	if (vs_config_check(cand, field) != 0)
 		return CFGKEEP_REJECTED;
 	for (unsigned i = 0; i < VS_CONFIG_NFIELDS; i++) {
 		const vs_config_field_t *f = &vs_config_fields[i];
-		if (row_same(&k->cand, &v->cfg, f))
+		if (row_same(cand, &v->cfg, f))
 			continue;
 		if (f->when == VS_CFG_WHEN_OFF && !vehicle_config_idle(v)) {
 			*field = f->name;
@@ -140,18 +157,18 @@ static cfgkeep_result_t commit(cfgkeep_t *k, const char **field)
 		live = live || f->when == VS_CFG_WHEN_ANY;
 	}
 	/* The running configuration: the candidate with the running values of
-	 * its RESTART rows (k->buf holds the wanted ones meanwhile). */
-	restart_rows(&k->cand, k->buf, true);
-	restart_rows(&v->cfg, k->buf + sizeof k->buf / 2, true);
-	restart_rows(&k->cand, k->buf + sizeof k->buf / 2, false);
-	if (vs_config_check(&k->cand, field) != 0)
+	 * its RESTART rows (the wanted ones set aside meanwhile). */
+	restart_rows(cand, wanted, true);
+	restart_rows(&v->cfg, running, true);
+	restart_rows(cand, running, false);
+	if (vs_config_check(cand, field) != 0)
 		return CFGKEEP_REJECTED;
 	if (off)
-		vehicle_reconfigure(v, &k->cand);
+		vehicle_reconfigure(v, cand);
 	else if (live)
-		vehicle_config_live(v, &k->cand);
-	k->want = k->cand;
-	restart_rows(&k->want, k->buf, false);
+		vehicle_config_live(v, cand);
+	rows_copy(&k->want, cand);
+	restart_rows(&k->want, wanted, false);
 	for (unsigned i = 0; i < VS_CONFIG_NFIELDS; i++)
 		if (!row_same(&k->want, &v->cfg, &vs_config_fields[i]))
 			return CFGKEEP_PENDING;
@@ -165,23 +182,32 @@ void cfgkeep_sync(cfgkeep_t *k)
 			row_copy(&k->want, &k->v->cfg, &vs_config_fields[i]);
 }
 
+/* The candidate: the running configuration (its io.xml and version) with
+ * the wanted rows. */
+static void candidate(cfgkeep_t *k, vs_config_t *cand)
+{
+	cfgkeep_sync(k);
+	*cand = k->v->cfg;
+	rows_copy(cand, &k->want);
+}
+
 cfgkeep_result_t cfgkeep_set(cfgkeep_t *k, const vs_config_field_t *f, const void *row,
 			     const char **field)
 {
-	uint8_t *d = (uint8_t *)&k->cand + f->off;
-	cfgkeep_sync(k);
-	k->cand = k->want;
+	vs_config_t cand; /* on the stack only while judged */
+	uint8_t *d = (uint8_t *)&cand + f->off;
+	candidate(k, &cand);
 	for (uint32_t j = 0; j < row_bytes(f); j++)
 		d[j] = ((const uint8_t *)row)[j];
-	return commit(k, field);
+	return commit(k, &cand, field);
 }
 
 cfgkeep_result_t cfgkeep_restore(cfgkeep_t *k, bool saved, const char **field)
 {
-	cfgkeep_sync(k);
-	k->cand = k->want;
-	rows_copy(&k->cand, saved ? &k->saved : &k->base);
-	return commit(k, field);
+	vs_config_t cand;
+	candidate(k, &cand);
+	rows_copy(&cand, saved ? &k->saved : &k->base);
+	return commit(k, &cand, field);
 }
 
 cfgkeep_result_t cfgkeep_save(cfgkeep_t *k, const char **field)
@@ -190,12 +216,13 @@ cfgkeep_result_t cfgkeep_save(cfgkeep_t *k, const char **field)
 					  [CFGSTORE_IO] = "store error",
 					  [CFGSTORE_VERIFY] = "verify failed",
 					  [CFGSTORE_NO_STORE] = "store unusable"};
+	uint8_t buf[CFGKEEP_PAYLOAD_MAX]; /* the saved form while it is written */
 	if (!k->store)
 		return CFGKEEP_NO_STORE;
 	cfgkeep_sync(k);
-	size_t n = vs_config_encode(&k->want, &k->base, k->buf, sizeof k->buf);
+	size_t n = vs_config_encode(&k->want, &k->base, buf, sizeof buf);
 	cfgstore_status_t st =
-	    n ? cfgstore_save(k->store, k->buf, (uint32_t)n, vs_config_schema()) : CFGSTORE_TOO_BIG;
+	    n ? cfgstore_save(k->store, buf, (uint32_t)n, vs_config_schema()) : CFGSTORE_TOO_BIG;
 	if (st != CFGSTORE_OK) {
 		*field = st < sizeof why / sizeof why[0] && why[st] ? why[st] : "store error";
 		return CFGKEEP_STORE_ERROR;

@@ -10,11 +10,18 @@
  * vehicle_config_idle, a RESTART one is kept for the next start (the unit
  * runs on with its value), an ANY one changes at once. A save writes what
  * the wanted configuration has that the base has not.
+ *
+ * The keeper holds the three as their rows only (cfgkeep_rows_t, 280 bytes
+ * on a board where a vs_config_t has 1.3 KiB): a change is judged on the
+ * stack, a copy of the running configuration with the wanted rows, and the
+ * saved form is built on the stack (CFGKEEP_PAYLOAD_MAX) only while it is
+ * read or written, so that a board's RAM holds no more than the rows.
  */
 #ifndef VS_CONFIG_KEEP_H
 #define VS_CONFIG_KEEP_H
 
 #include <stdbool.h>
+#include <stddef.h>
 #include <stdint.h>
 
 #include "cfgstore.h"
@@ -55,13 +62,20 @@ typedef enum {
 	CFGKEEP_STORE_ERROR, /* save: the store failed (*field: what it said) */
 } cfgkeep_result_t;
 
+/* The table's rows of a configuration: the bytes of vs_config_t before
+ * firmware_version, each row at its offset (config_keep.c asserts that every
+ * row lies there). */
+#define CFGKEEP_ROWS_BYTES offsetof(vs_config_t, firmware_version)
+typedef union {
+	uint8_t b[CFGKEEP_ROWS_BYTES];
+	vs_real_t align; /* the members' alignment */
+} cfgkeep_rows_t;
+
 typedef struct cfgkeep {
 	vehicle_t *v;
 	const hal_store_t *store; /* NULL: none */
 	cfgkeep_boot_t boot;
-	vs_config_t base, saved, want;
-	vs_config_t cand; /* a change under judgement */
-	uint8_t buf[CFGKEEP_PAYLOAD_MAX];
+	cfgkeep_rows_t base, saved, want;
 } cfgkeep_t;
 
 /* Before vehicle_init: keeps base, reads the store (NULL: none) and fills

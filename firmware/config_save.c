@@ -47,7 +47,7 @@ static bool same_bytes(const uint8_t *a, const uint8_t *b, size_t n)
 	return true;
 }
 
-size_t vs_config_encode(const vs_config_t *cur, const vs_config_t *base, uint8_t *buf, size_t cap)
+size_t vs_config_encode(const void *cur, const void *base, uint8_t *buf, size_t cap)
 {
 	if (cap < 4)
 		return 0;

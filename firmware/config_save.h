@@ -31,8 +31,9 @@ uint32_t vs_config_schema(void);
 uint8_t vs_config_type_size(uint8_t type);
 
 /* The fields of cur that differ from base, into buf; the bytes written, or
- * 0 when they do not fit cap. */
-size_t vs_config_encode(const vs_config_t *cur, const vs_config_t *base, uint8_t *buf, size_t cap);
+ * 0 when they do not fit cap. cur and base: a vs_config_t, or its rows
+ * alone (each row at its offset, config_keep.h). */
+size_t vs_config_encode(const void *cur, const void *base, uint8_t *buf, size_t cap);
 
 typedef struct {
 	uint16_t applied; /* entries taken */

@@ -64,9 +64,9 @@ __attribute__((format(printf, 3, 4))) static void fail(out_t *o, int code, const
 	o->len += n < o->cap - o->len ? n : o->cap - o->len - 1;
 }
 
-/* Row f's elements in c, each after a space, as the operations' replies
- * write numbers. */
-static void put_values(out_t *o, const vs_config_t *c, const vs_config_field_t *f)
+/* Row f's elements in c (a configuration or its rows), each after a space,
+ * as the operations' replies write numbers. */
+static void put_values(out_t *o, const void *c, const vs_config_field_t *f)
 {
 	const uint8_t *p = (const uint8_t *)c + f->off;
 	for (unsigned k = 0; k < f->n; k++) {
@@ -98,7 +98,7 @@ static void put_field(out_t *o, console_t *c, const vs_config_field_t *f)
 	put_values(o, &c->v->cfg, f);
 	if (c->keep && cfgkeep_pending(c->keep, f)) {
 		put(o, " pending");
-		put_values(o, &c->keep->want, f);
+		put_values(o, c->keep->want.b, f);
 	}
 }
 
@@ -231,7 +231,7 @@ static void set_field(out_t *o, console_t *c, const vs_config_field_t *f, int el
 	/* All elements at once: the row's bytes of the wanted configuration. */
 	uint8_t sz = vs_config_type_size(f->type);
 	uint8_t row[VS_MAX_AXES * 8];
-	memcpy(row, (const uint8_t *)&c->keep->want + f->off, (size_t)f->n * sz);
+	memcpy(row, c->keep->want.b + f->off, (size_t)f->n * sz);
 	for (unsigned i = 0; i < nv; i++)
 		memcpy(row + (size_t)(elem >= 0 ? (unsigned)elem : i) * sz, &v[i], sz);
 	cfgkeep_result_t r = cfgkeep_set(c->keep, f, row, &bad);
