@@ -369,3 +369,56 @@ const char *mbp_check(const mb_profile_t *p)
 		return "block: zero";
 	return NULL;
 }
+
+/* ---- the sample's reads ------------------------------------------------ */
+
+static const uint8_t sample_regs[3] = {MBP_POSITION, MBP_STATUS, MBP_ALARM};
+
+unsigned mbp_read_plan(const mb_profile_t *p, unsigned ch, unsigned max, mbp_read_t rd[3])
+{
+	mbp_read_t it[3];
+	unsigned n = 0, out = 0;
+	unsigned block = p->block < max ? p->block : max;
+	for (unsigned k = 0; k < 3; k++) {
+		const mbp_reg_t *g = &p->reg[sample_regs[k]];
+		if (!g->words)
+			continue;
+		mbp_read_t x = {mbp_addr(g, ch), g->words, (g->flags & MBP_INPUT) != 0};
+		unsigned j = n++;
+		/* sorted by (area, address) */
+		while (j > 0 && (it[j - 1].input > x.input ||
+				 (it[j - 1].input == x.input && it[j - 1].addr > x.addr))) {
+			it[j] = it[j - 1];
+			j--;
+		}
+		it[j] = x;
+	}
+	for (unsigned i = 0; i < n;) {
+		unsigned j = i, end = (unsigned)(it[i].addr + it[i].n);
+		while (j + 1 < n && it[j + 1].input == it[i].input &&
+		       (unsigned)(it[j + 1].addr + it[j + 1].n - it[i].addr) <= block) {
+			j++;
+			unsigned e = (unsigned)(it[j].addr + it[j].n);
+			end = e > end ? e : end;
+		}
+		rd[out].addr = it[i].addr;
+		rd[out].n = (uint8_t)(end - it[i].addr);
+		rd[out].input = it[i].input;
+		out++;
+		i = j + 1;
+	}
+	return out;
+}
+
+bool mbp_from_read(const mb_profile_t *p, unsigned r, unsigned ch, const mbp_read_t *rd,
+		   const uint16_t *regs, uint16_t *w)
+{
+	const mbp_reg_t *g = &p->reg[r];
+	uint16_t a = mbp_addr(g, ch);
+	if (!g->words || rd->input != ((g->flags & MBP_INPUT) != 0) || a < rd->addr ||
+	    (unsigned)(a + g->words) > (unsigned)(rd->addr + rd->n))
+		return false;
+	for (unsigned k = 0; k < g->words; k++)
+		w[k] = regs[(unsigned)(a - rd->addr) + k];
+	return true;
+}

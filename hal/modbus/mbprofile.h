@@ -107,6 +107,22 @@ static inline bool mbp_enabled(const mb_profile_t *p, uint16_t status)
 	return (status & p->status_mask) == p->status_mask;
 }
 
+/* One read of a drive's sample: n registers from addr, holding or input. */
+typedef struct {
+	uint16_t addr;
+	uint8_t n;
+	bool input;
+} mbp_read_t;
+
+/* Position, status and alarm of channel ch in as few reads as the
+ * profile's block allows (never more than max registers; reads never mix
+ * holding and input registers); the number of reads, at most 3. */
+unsigned mbp_read_plan(const mb_profile_t *p, unsigned ch, unsigned max, mbp_read_t rd[3]);
+/* The words of register r from a read that covers it (false when it does
+ * not): w gets its 1 or 2 words. */
+bool mbp_from_read(const mb_profile_t *p, unsigned r, unsigned ch, const mbp_read_t *rd,
+		   const uint16_t *regs, uint16_t *w);
+
 /* One attribute of the text form. Returns NULL, or why the value is not
  * taken (a constant string); unknown keys: "unknown". */
 const char *mbp_set(mb_profile_t *p, const char *key, const char *val);

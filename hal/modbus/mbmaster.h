@@ -1,0 +1,182 @@
+/* Modbus RTU master for a microcontroller: one request at a time, advanced
+ * by polls from the main loop, never waiting on the line.
+ *
+ * Two layers, plain C without libc (the board image and the host tests
+ * build the same file):
+ *
+ *  - mbm_*: the RTU link. A request is framed (address, function, data,
+ *    CRC-16 low byte first), sent after the line has been silent for the
+ *    3.5-character gap, with the RS-485 driver enabled from the first byte
+ *    until the last has left the shift register (port->tx_done). The reply
+ *    is taken byte by byte as it comes: complete at the length its function
+ *    and first bytes announce; no first byte within timeout_us is a
+ *    timeout, a reply that stops for byte_us is cut. Address, function,
+ *    byte count, the echo of a write and the CRC are checked; an exception
+ *    reply gives its code. A failed attempt is retried (retries times)
+ *    after the line has been silent for the gap again (a late answer is
+ *    read and dropped, never paired with the next request); exceptions 1
+ *    and 2 (illegal function, illegal address) are not retried: the answer
+ *    will not change.
+ *
+ *  - mbd_*: a bus of wheel drives on the profile of hal/modbus/mbprofile.h,
+ *    with vehicle-fw's cycle (hal/linux/modbus_drive.h): per drive, set-up
+ *    (init registers and the comm_timeout register) until done, a fault
+ *    reset when asked, the enable when it changes, the target speed, then
+ *    position, status and alarm in as few reads as the profile's block
+ *    allows; the tick takes the latest sample (mbd_read). A drive whose
+ *    cycle gets no reply is only probed every MBD_PROBE_US, one attempt,
+ *    so that it does not hold up the others. Reported state as on Linux:
+ *    fresh once per sample, HAL_SILENT_BUSY after exception 6,
+ *    HAL_SILENT_MAP after 1 or 2 (the firmware's 202 and 213).
+ *
+ * Time is a free-running microsecond count (wraps; compared by
+ * difference). Cost per poll: at most one frame built or MBM_ADU_MAX bytes
+ * read and checked.
+ */
+#ifndef HAL_MODBUS_MBMASTER_H
+#define HAL_MODBUS_MBMASTER_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "../hal.h"
+#include "mbprofile.h"
+
+/* The longest frame: a read of MBM_READ_MAX registers (5 + 2n bytes). */
+#define MBM_READ_MAX 16
+#define MBM_ADU_MAX  (5 + 2 * MBM_READ_MAX)
+
+/* How a request ended (mbm_poll, mbm_check). */
+enum {
+	MBM_BUSY = 0,	 /* under way */
+	MBM_OK,		 /* a good reply */
+	MBM_NO_REPLY,	 /* nothing within timeout_us */
+	MBM_CUT,	 /* the reply stopped for byte_us before its end */
+	MBM_CRC,	 /* a whole reply with a bad CRC */
+	MBM_BAD,	 /* another address, function, count or echo */
+	MBM_EXCEPTION,	 /* an exception reply (code in exc) */
+	MBM_MORE = 0x7F, /* mbm_check: not complete yet */
+};
+
+typedef struct {
+	/* The bytes received since the last call, at most max; never blocks. */
+	size_t (*read)(void *ctx, uint8_t *buf, size_t max);
+	/* Queues a whole frame for the transmitter (the port holds n bytes). */
+	void (*write)(void *ctx, const uint8_t *buf, size_t n);
+	/* Every byte written has left the line (shift register empty). */
+	bool (*tx_done)(void *ctx);
+	/* The RS-485 transceiver's driver enable. */
+	void (*de)(void *ctx, bool on);
+	void *ctx;
+} mbm_port_t;
+
+typedef struct {
+	uint32_t requests, retries, timeouts, crc_errors, bad, exceptions, busy, illegal;
+} mbm_count_t;
+
+typedef struct {
+	const mbm_port_t *port;
+	uint32_t gap_us, timeout_us, byte_us;
+	uint8_t retries;
+	uint8_t state, attempt, result, exc;
+	/* the request, for checking its reply */
+	uint8_t unit, fc, n;
+	uint16_t addr;
+	uint8_t txn, rxn;
+	uint32_t t_line; /* last byte on the line, or the start of the wait */
+	mbm_count_t cnt;
+	uint8_t tx[MBM_ADU_MAX];
+	uint8_t rx[MBM_ADU_MAX];
+} mbm_t;
+
+/* One character time on the line (start, 8 data, parity, stop bits), us. */
+uint32_t mbm_char_us(uint32_t baud, uint32_t frame_bits);
+/* CRC-16 of Modbus (poly 0xA001 reflected, init 0xFFFF). */
+uint16_t mbm_crc(const uint8_t *b, size_t n);
+/* gap: 3.5 characters (1750 us above 19200 baud, as the standard says);
+ * byte_us: a reply's bytes at most that far apart (4 characters, at least
+ * 1 ms). The line is taken as silent since now. */
+void mbm_init(mbm_t *m, const mbm_port_t *port, uint32_t baud, uint32_t frame_bits,
+	      uint32_t timeout_us, uint8_t retries, uint32_t now_us);
+/* Starts a request (only when none is under way: false otherwise). Read:
+ * function 03 (holding) or 04 (input), n registers (1..MBM_READ_MAX).
+ * Write: 06 for one register, 16 for two. */
+bool mbm_read(mbm_t *m, uint8_t unit, bool input, uint16_t addr, uint8_t n);
+bool mbm_write(mbm_t *m, uint8_t unit, uint16_t addr, uint8_t n, const uint16_t *w);
+/* Advances the request; MBM_BUSY while under way, then its result (once;
+ * then idle). */
+uint8_t mbm_poll(mbm_t *m, uint32_t now_us);
+/* Register i of the last good read reply. */
+uint16_t mbm_reg(const mbm_t *m, unsigned i);
+/* A reply so far (rx, n bytes) to the request (unit, fc, addr, qty): MBM_MORE
+ * while shorter than its function says, else MBM_OK, MBM_CRC, MBM_BAD or
+ * MBM_EXCEPTION (*exc: the code). tx: the request as sent (a write's echo). */
+uint8_t mbm_check(const uint8_t *tx, const uint8_t *rx, size_t n, uint8_t *exc);
+
+/* ---- the drive bus ------------------------------------------------------ */
+
+#define MBD_DRIVES   4
+#define MBD_PROBE_US 200000u
+/* What mbd_check allows a drive to take before its answer starts. */
+#define MBD_TURNAROUND_US 1000u
+
+typedef struct {
+	uint8_t unit, ch;
+	bool reverse;
+	/* tick -> bus */
+	int32_t cmd_cps;
+	bool cmd_enable;
+	uint8_t reset_req;
+	/* bus -> tick */
+	int32_t pos;
+	uint16_t status, alarm;
+	bool fresh, sampled;
+	uint8_t why; /* HAL_SILENT_* of the last failed cycle */
+	/* bus only */
+	bool silent, setup_done, enable_ok, enable_sent;
+	uint8_t reset_done;
+	uint32_t probe_at, last_ok_us;
+	uint32_t samples, failures;
+} mbd_drive_t;
+
+typedef struct {
+	mbm_t m;
+	const mb_profile_t *prof;
+	uint32_t comm_timeout_ms; /* 0: the drives' own stop is not set */
+	mbd_drive_t d[MBD_DRIVES];
+	uint8_t nd, cur, step, sub, retries;
+	uint8_t nrd;	  /* reads of the sample under way */
+	mbp_read_t rd[3]; /* the current drive's sample reads */
+	uint16_t val[MBP_REG_COUNT][2];
+	uint32_t cycle_start, cycle_us, cycle_worst_us, cycles;
+} mbd_bus_t;
+
+/* The drive cycle when every drive answers, us: each drive's speed write
+ * and sample reads at baud, with the 3.5-character gap after each frame
+ * and turnaround_us for the drive to start its answer. */
+uint32_t mbd_cycle_us(const mb_profile_t *p, unsigned ndrives, uint32_t baud, uint32_t frame_bits,
+		      uint32_t turnaround_us);
+/* NULL when the line carries the cycle: one cycle and a request that fails
+ * with every retry fit within the firmware's drive timeout twice over;
+ * else why not. */
+const char *mbd_check(const mb_profile_t *p, unsigned ndrives, uint32_t baud, uint32_t frame_bits,
+		      uint32_t timeout_us, uint8_t retries, uint32_t drive_timeout_ms);
+void mbd_init(mbd_bus_t *b, const mb_profile_t *p, const mbm_port_t *port, uint32_t baud,
+	      uint32_t frame_bits, uint32_t timeout_us, uint8_t retries, uint32_t now_us);
+/* Adds a drive (unit id, channel, polarity reverse); its index. */
+unsigned mbd_add(mbd_bus_t *b, uint8_t unit, uint8_t ch, bool reverse);
+/* Advances the cycle; call between ticks as often as the loop can. */
+void mbd_poll(mbd_bus_t *b, uint32_t now_us);
+
+/* The tick's side (vs_hal_ops_t, as hal/linux/modbus_drive.c). */
+void mbd_set_velocity(mbd_bus_t *b, unsigned i, int32_t cps_q8);
+void mbd_enable(mbd_bus_t *b, unsigned i, bool on);
+void mbd_reset_fault(mbd_bus_t *b, unsigned i);
+void mbd_read(mbd_bus_t *b, unsigned i, hal_drive_state_t *st);
+
+/* A frame writing enable_off to drive i, for a fault handler that sends it
+ * by polling the UART; its length. */
+size_t mbd_off_frame(const mbd_bus_t *b, unsigned i, uint8_t *f);
+
+#endif
