@@ -88,8 +88,10 @@ void cfgkeep_load(cfgkeep_t *k, const vs_config_t *base, const hal_store_t *stor
 	*start = *base;
 	if (store) {
 		k->boot.result = (uint8_t)load_record(k, start);
+		/* never a part of an unreadable record (from the rows: start
+		 * and base may be one) */
 		if (k->boot.result != CFGKEEP_BOOT_LOADED)
-			*start = *base; /* never a part of an unreadable record */
+			rows_copy(start, &k->base);
 	}
 	rows_copy(&k->saved, start);
 	rows_copy(&k->want, start);

@@ -39,9 +39,9 @@ MCU_CPU_cortex-m0 := -mcpu=cortex-m0 -mthumb -mfloat-abi=soft
 
 # The console and binary-frame parsers; the host client and CAN mapping stay on the host.
 MCU_PROTO_SRC := $(filter $(addprefix proto/,cmdtab.c dispatch.c console.c fmt.c numparse.c wire.c frame.c \
-	frame_srv.c link.c port.c server.c),$(PROTO_SRC))
+	frame_srv.c link.c port.c server.c console_config.c),$(PROTO_SRC))
 MCU_BOARD_SRC := $(addprefix hal/cortexm/,startup.c systick.c uart.c loop_hal.c board_main.c \
-	small_libc.c udivmod64.c)
+	small_libc.c udivmod64.c flashstore.c)
 
 .PHONY: cortexm nofloat-selftest
 
@@ -70,10 +70,10 @@ MCU_BASE := -std=c11 -Os -fno-ipa-cp -g $(WARN) -I. -MMD -MP $(MCU_CPU_$(TARGET)
 	-fdata-sections $(MCU_LTO) $(MCU_DEFS)
 MCU_CFLAGS_firmware := $(MCU_BASE) $(STRICT) -ffreestanding
 # The board is short of flash: it leaves out the help lines ($help NAME gives
-# the signature) and $config (its configuration is compiled in, in
-# board_main.c): 1.8 and 1.3 KiB, the room the jerk-limited profiles take.
-MCU_CFLAGS_proto := $(MCU_BASE) $(STRICT) $(HOST_DEFS) -DVS_NO_HELP_TEXT -DVS_NO_CONFIG_EXTRA \
-	-DVS_TABLE_CRC_CONST
+# the signature), 1.8 KiB, the room the jerk-limited profiles take. $config
+# changes the compiled-in configuration (board_main.c) and keeps it in the
+# store's flash pages (flashstore.c).
+MCU_CFLAGS_proto := $(MCU_BASE) $(STRICT) $(HOST_DEFS) -DVS_NO_HELP_TEXT -DVS_TABLE_CRC_CONST
 MCU_CFLAGS_hal := $(MCU_BASE) -ffreestanding
 mcu_objs = $(patsubst %.c,$(MCU)/obj/%.o,$(1))
 # The board's memcpy, memset and the like, and its 64-bit division, are
@@ -100,6 +100,21 @@ $(MCU)/vehicle.elf: $(call mcu_objs,$(MCU_BOARD_SRC)) $(MCU)/libproto.a $(MCU)/l
 	@$(if $(Q),echo "  LD      $@")
 	$(Q)$(ARM_CC) $(MCU_CPU_$(TARGET)) -Os -flto $(MCU_LTO_LINK) -nostartfiles --specs=nano.specs \
 		-Wl,--gc-sections -Wl,-Map=$(MCU)/vehicle.map -T hal/cortexm/$(TARGET).ld \
+		-o $@ $(filter %.o %.a,$^) -lm -lc -lnosys -lgcc
+
+# The reset-in-the-save test image (tests/mcu): the board's code with the
+# store's cut hook (flashstore.h, $storecut K), the same libraries.
+MCU_CUT_SRC := hal/cortexm/board_main.c hal/cortexm/flashstore.c
+$(MCU)/obj-cut/%.o: %.c
+	@mkdir -p $(dir $@)
+	@$(if $(Q),echo "  CC      $@")
+	$(Q)$(ARM_CC) $(MCU_CFLAGS_hal) -DBOARD_STORE_CUT $(EXTRA_CFLAGS) -c $< -o $@
+$(MCU)/vehicle-cut.elf: $(call mcu_objs,$(filter-out $(MCU_CUT_SRC),$(MCU_BOARD_SRC))) \
+		$(patsubst %.c,$(MCU)/obj-cut/%.o,$(MCU_CUT_SRC)) $(MCU)/libproto.a $(MCU)/libfirmware.a \
+		hal/cortexm/$(TARGET).ld
+	@$(if $(Q),echo "  LD      $@")
+	$(Q)$(ARM_CC) $(MCU_CPU_$(TARGET)) -Os -flto $(MCU_LTO_LINK) -nostartfiles --specs=nano.specs \
+		-Wl,--gc-sections -T hal/cortexm/$(TARGET).ld \
 		-o $@ $(filter %.o %.a,$^) -lm -lc -lnosys -lgcc
 
 # The tick-cost benchmark for QEMU's mps2-an386 (make bench, tools/bench/
@@ -176,7 +191,8 @@ check: nofloat-selftest
 .PHONY: mcu-images
 mcu-images:
 	$(Q)$(MAKE) --no-print-directory TARGET=cortex-m4 BUILD=$(BUILD) cortexm \
-		$(BUILD)/cortex-m4/bench.elf $(BUILD)/cortex-m4/divcheck.elf
+		$(BUILD)/cortex-m4/bench.elf $(BUILD)/cortex-m4/divcheck.elf \
+		$(BUILD)/cortex-m4/vehicle-cut.elf
 	$(Q)$(MAKE) --no-print-directory TARGET=cortex-m4 MCU_KIN=omni BUILD=$(BUILD) cortexm
 	$(Q)$(MAKE) --no-print-directory TARGET=cortex-m0 BUILD=$(BUILD) cortexm
 

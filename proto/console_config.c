@@ -36,6 +36,11 @@ struct config_list_bytes {
 _Static_assert(2 + sizeof(struct config_list_bytes) <= CONSOLE_REPLY_MAX,
 	       "$config's list fits one reply");
 
+/* No row has more elements than set_field holds. */
+#define ROW_FITS(m, n, ...) _Static_assert((n) <= VS_MAX_AXES, #m " fits set_field");
+VS_CONFIG_FIELDS(ROW_FITS)
+#undef ROW_FITS
+
 typedef struct {
 	char *buf;
 	size_t cap, len;
@@ -219,10 +224,6 @@ static void set_field(out_t *o, console_t *c, const vs_config_field_t *f, int el
 	if (nv != want) {
 		fail(o, CONSOLE_E_ARITY, "$config %s takes %u value%s, got %u", f->name, want,
 		     want == 1 ? "" : "s", nv);
-		return;
-	}
-	if (want > VS_MAX_AXES) {
-		fail(o, CONSOLE_E_EXTRA, "$config %s: too many elements", f->name);
 		return;
 	}
 	for (unsigned i = 0; i < nv; i++)

@@ -8,13 +8,20 @@
  * absorbed.
  */
 #include "board.h"
+#include "firmware/config_keep.h"
 #include "firmware/vehicle.h"
+#include "flashstore.h"
 #include "loop_hal.h"
 #include "proto/server.h"
+
+#ifdef BOARD_STORE_CUT
+#include <string.h>
+#endif
 
 static loop_hal_t plant;
 static vehicle_t unit;
 static vs_server_t srv; /* the console and the binary frames on the UART */
+static cfgkeep_t keep;	/* $config: the compiled-in base, the store's overlay */
 
 /* What the tick and the requests cost, in processor cycles (systick_cycles):
  * read from outside, through a debugger or QEMU's monitor (tests/mcu,
@@ -44,10 +51,13 @@ static __attribute__((noinline)) uint32_t unit_init(void)
 	/* The loopback's drives follow their setpoints at once. */
 	for (unsigned i = 0; i < VS_MAX_AXES; i++)
 		cfg.drive_lag_ms[i] = 0;
+	/* The compiled-in configuration is the base; the store's goes over. */
+	cfgkeep_load(&keep, &cfg, &flashstore, &cfg);
 	loop_hal_init(&plant, cfg.tick_hz);
 	if (vehicle_init(&unit, &cfg, &hal, NULL) != 0)
 		for (;;)
 			;
+	cfgkeep_attach(&keep, &unit);
 	/* A request walks a few queued waypoints of the corner speed planning,
 	 * the idle calls the rest, and a few trial lines of a line's plan each. */
 	vehicle_set_plan_budget(&unit, BOARD_PLAN_BUDGET);
@@ -80,11 +90,31 @@ static uint32_t serve_link(uint32_t done, uint32_t now_ms, uint32_t seen, uint32
 	return r;
 }
 
+#ifdef BOARD_STORE_CUT
+/* The reset-in-the-save test image's $storecut K (flashstore.h). */
+static bool store_cut(void *ctx, int argc, char **argv, char *reply, size_t cap)
+{
+	uint32_t k = 0;
+	(void)ctx;
+	if (argc != 2 || strcmp(argv[0], "$storecut") != 0)
+		return false;
+	for (const char *p = argv[1]; *p >= '0' && *p <= '9'; p++)
+		k = k * 10u + (uint32_t)(*p - '0');
+	flashstore_arm_cut(k);
+	strncpy(reply, "ok cut", cap);
+	return true;
+}
+#define BOARD_EXTRA store_cut
+#else
+#define BOARD_EXTRA NULL
+#endif
+
 int main(void)
 {
 	uint32_t tick_hz = unit_init();
 	uart_init();
-	server_init(&srv, &unit, NULL, NULL, NULL, NULL);
+	server_init(&srv, &unit, BOARD_EXTRA, NULL, NULL, NULL);
+	console_set_keep(&srv.con, &keep);
 	server_attach_serial(&srv, &uart_link);
 	systick_init(tick_hz);
 

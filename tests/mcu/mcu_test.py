@@ -303,9 +303,10 @@ def c_boot_and_queries(b):
     expect(b, "getDefaultAcceleration", "ok true 500.000 180.000")
     expect(b, "getPosition", "ok true 0.000 0.000 0.000")
     expect(b, "getActiveAlarm 16", "ok true 0 0")
-    # the board's configuration is compiled in (hal/cortexm/board_main.c):
-    # the board leaves $config and the help lines out for flash
-    expect(b, "$config tick_hz", "error 8 $config is not in this build")
+    # the compiled-in configuration (hal/cortexm/board_main.c), the store
+    # erased (a fresh board): $config reads it; the help lines are left out
+    expect(b, "$config tick_hz", "ok tick_hz 1000")
+    expect(b, "$config store", "ok store empty table 0x916B11C3")
     expect(b, "$help moveForward", "ok 17 boolean moveForward(in double x_)")
     expect(b, "$help moveCircularRel",
            "ok 14 boolean moveCircularRel(in Point centerPoint, in double theta)")
