@@ -391,6 +391,7 @@ void vehicle_diag(const vehicle_t *v, vs_diag_t *d)
 	d->ref_pose = *motion_ref_pose(&v->motion);
 	d->odom_pose = v->odom;
 	d->cmd_twist_pt = v->cmd;
+	d->meas_twist_pt = v->meas;
 	for (unsigned i = 0; i < VS_MAX_AXES; i++)
 		d->wheel_cps_q8[i] = v->wheel_cps_q8[i];
 	d->ticks = v->ticks;

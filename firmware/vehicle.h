@@ -147,6 +147,7 @@ typedef struct {
 	fx_pose_t ref_pose;		   /* commanded */
 	fx_pose_t odom_pose;		   /* measured (odometry) */
 	fx_twist_t cmd_twist_pt;	   /* commanded body velocity per tick */
+	fx_twist_t meas_twist_pt;	   /* measured (odometry's) body motion of the last tick */
 	int32_t wheel_cps_q8[VS_MAX_AXES]; /* drive setpoints */
 	uint32_t ticks;			   /* control ticks since init */
 	uint32_t overruns;		   /* periods whose work took over a period */
@@ -201,6 +202,7 @@ struct vehicle {
 	uint32_t link_timeout_ticks, link_silent_ticks;
 	int32_t wheel_cps_q8[VS_MAX_AXES];
 	fx_twist_t cmd;
+	fx_twist_t meas; /* the odometry's body displacement of the last tick */
 	/* Latest drive samples; .enabled also follows drive_enable commands. */
 	hal_drive_state_t drive[VS_MAX_AXES];
 	int32_t meas_counts[VS_MAX_AXES];

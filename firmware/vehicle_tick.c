@@ -595,6 +595,7 @@ void vehicle_tick(vehicle_t *v, uint32_t now_us)
 	if (hold)
 		bound_hold(v, prev);
 	odom_integrate(&v->odom, &delta, &v->odom_trig);
+	v->meas = delta;
 
 	if (v->servo && ferr > v->following_err_max_q32)
 		following_fault(v, ferr);

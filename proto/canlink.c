@@ -157,56 +157,30 @@ uint32_t canlink_stmin_us(uint8_t stmin)
 
 /* ---- status ------------------------------------------------------------ */
 
+static const uint16_t status_ids[STREAM_CAN_FRAMES] = {CANLINK_ID_STATUS_A, CANLINK_ID_STATUS_B,
+						       CANLINK_ID_STATUS_C, CANLINK_ID_STATUS_D,
+						       CANLINK_ID_STATUS_E};
+
 void canlink_status_frame(const canlink_status_t *st, uint8_t node, unsigned which,
 			  canlink_frame_t *f)
 {
 	memset(f, 0, sizeof(*f));
 	f->dlc = 8;
-	switch (which) {
-	case 0:
-		f->id = CANLINK_ID_STATUS_A + node;
-		wire_put_u16(&f->data[0], st->state);
-		f->data[2] = st->alarms;
-		f->data[3] = st->counter;
-		wire_put_u16(&f->data[4], st->battery_cV);
-		wire_put_u16(&f->data[6], (uint16_t)st->vx_mm_s);
-		break;
-	case 1:
-		f->id = CANLINK_ID_STATUS_B + node;
-		wire_put_u32(&f->data[0], (uint32_t)st->x_dmm);
-		wire_put_u32(&f->data[4], (uint32_t)st->y_dmm);
-		break;
-	default:
-		f->id = CANLINK_ID_STATUS_C + node;
-		wire_put_u32(&f->data[0], (uint32_t)st->theta_mdeg);
-		wire_put_u16(&f->data[4], (uint16_t)st->vy_mm_s);
-		wire_put_u16(&f->data[6], (uint16_t)st->w_ddeg_s);
-		break;
-	}
+	if (which >= STREAM_CAN_FRAMES)
+		which = STREAM_CAN_FRAMES - 1u;
+	f->id = status_ids[which] + node;
+	stream_can_put(st, which, f->data);
 }
 
 int canlink_status_decode(const canlink_frame_t *f, uint8_t node, canlink_status_t *st)
 {
 	if (f->dlc != 8)
 		return -1;
-	if (f->id == CANLINK_ID_STATUS_A + node) {
-		st->state = wire_get_u16(&f->data[0]);
-		st->alarms = f->data[2];
-		st->counter = f->data[3];
-		st->battery_cV = wire_get_u16(&f->data[4]);
-		st->vx_mm_s = (int16_t)wire_get_u16(&f->data[6]);
-		return 0;
-	}
-	if (f->id == CANLINK_ID_STATUS_B + node) {
-		st->x_dmm = (int32_t)wire_get_u32(&f->data[0]);
-		st->y_dmm = (int32_t)wire_get_u32(&f->data[4]);
-		return 1;
-	}
-	if (f->id == CANLINK_ID_STATUS_C + node) {
-		st->theta_mdeg = (int32_t)wire_get_u32(&f->data[0]);
-		st->vy_mm_s = (int16_t)wire_get_u16(&f->data[4]);
-		st->w_ddeg_s = (int16_t)wire_get_u16(&f->data[6]);
-		return 2;
+	for (unsigned i = 0; i < STREAM_CAN_FRAMES; i++) {
+		if (f->id == status_ids[i] + (uint32_t)node) {
+			stream_can_get(f->data, i, st);
+			return (int)i;
+		}
 	}
 	return -1;
 }

@@ -12,6 +12,9 @@
  *   0x180+N  status A   unit -> host   state, alarm count, counter, battery, vx
  *   0x280+N  status B   unit -> host   pose x, y
  *   0x380+N  status C   unit -> host   pose theta, vy, rotation speed
+ *   0x480+N  status D   unit -> host   measured speeds, queue, newest alarm type
+ *   0x680+N  status E   unit -> host   newest alarm code, inputs, outputs
+ *   (the status group's layout: stream.def, the serial stream's values)
  *   0x580+N  response   unit -> host   segmented message
  *   0x600+N  request    host -> unit   segmented message
  *
@@ -43,12 +46,15 @@
 
 #include "../firmware/vehicle.h"
 #include "../hal/link.h"
+#include "stream.h"
 #include "wire.h"
 
 /* Identifier bases; the node id is added. */
 #define CANLINK_ID_STATUS_A  0x180u
 #define CANLINK_ID_STATUS_B  0x280u
 #define CANLINK_ID_STATUS_C  0x380u
+#define CANLINK_ID_STATUS_D  0x480u
+#define CANLINK_ID_STATUS_E  0x680u
 #define CANLINK_ID_RESPONSE  0x580u
 #define CANLINK_ID_REQUEST   0x600u
 #define CANLINK_NODE_MIN     1
@@ -208,25 +214,17 @@ void canlink_rx(canlink_t *c, const canlink_frame_t *f, uint32_t now_us);
  * sends the status frames when due. */
 void canlink_poll(canlink_t *c, uint32_t now_us);
 
-/* The status frames' content, decoded (also used by the host). */
-typedef struct {
-	uint16_t state;
-	uint8_t alarms;	     /* active alarm count, saturated at 255 */
-	uint8_t counter;     /* +1 per status group */
-	uint16_t battery_cV; /* getBatteryVoltage x 10: 0.01 V units */
-	int16_t vx_mm_s, vy_mm_s;
-	int16_t w_ddeg_s;     /* 0.1 deg/s */
-	int32_t x_dmm, y_dmm; /* 0.1 mm */
-	int32_t theta_mdeg;   /* 0.001 deg */
-} canlink_status_t;
+/* The status frames' content, decoded (also used by the host): the
+ * telemetry sample of stream.def, whose rows place each value in a frame. */
+typedef stream_sample_t canlink_status_t;
 
 /* Fills st from the unit (what the next status group will carry). */
 void canlink_status_read(vehicle_t *v, canlink_status_t *st);
-/* Frames 0..2 (A, B, C) of a status group for node. */
+/* Frames 0..4 (A..E) of a status group for node. */
 void canlink_status_frame(const canlink_status_t *st, uint8_t node, unsigned which,
 			  canlink_frame_t *f);
 /* Decodes a status frame of node into st (only the fields that frame
- * carries). Returns 0..2 for A, B, C, or -1 when f is none of them. */
+ * carries). Returns 0..4 for A..E, or -1 when f is none of them. */
 int canlink_status_decode(const canlink_frame_t *f, uint8_t node, canlink_status_t *st);
 
 #endif

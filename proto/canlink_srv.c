@@ -8,62 +8,9 @@
 
 /* ---- status ------------------------------------------------------------ */
 
-/* x * scale rounded half away from zero, saturated; NaN reads 0. */
-static int64_t round_sat(double x, double scale, int64_t lo, int64_t hi)
-{
-	double y = x * scale;
-
-	if (y != y)
-		return 0;
-	if (y <= (double)lo)
-		return lo;
-	if (y >= (double)hi)
-		return hi;
-	return (int64_t)(y < 0 ? y - 0.5 : y + 0.5);
-}
-
-/* Q32 per tick -> units per second, rounded, saturated to int16. */
-static int16_t rate_i16(q32_t per_tick, uint32_t tick_hz, int32_t mult)
-{
-	int64_t v = per_tick * (int64_t)tick_hz * mult;
-	int64_t half = (int64_t)1 << 31;
-	int64_t r = v >= 0 ? (v + half) >> 32 : -((-v + half) >> 32);
-
-	if (r > INT16_MAX)
-		r = INT16_MAX;
-	if (r < INT16_MIN)
-		r = INT16_MIN;
-	return (int16_t)r;
-}
-
 void canlink_status_read(vehicle_t *v, canlink_status_t *st)
 {
-	vs_position_t pos = {0, 0, 0};
-	char msg[VS_STATE_MSG_MAX];
-	vs_alarm_t one[1];
-	int16_t state = 0, nalarms = 0;
-	uint16_t got = 0;
-	double batt = 0;
-	vs_diag_t d;
-
-	memset(st, 0, sizeof(*st));
-	vs_getState(v, &state, msg);
-	vs_getActiveAlarm(v, 0, &nalarms, one, &got);
-	vs_getBatteryVoltage(v, &batt);
-	vs_getPosition(v, &pos);
-	memset(&d, 0, sizeof(d));
-	vehicle_diag(v, &d);
-
-	st->state = (uint16_t)state;
-	st->alarms = nalarms < 0 ? 0 : nalarms > 255 ? 255 : (uint8_t)nalarms;
-	st->battery_cV = (uint16_t)round_sat(batt, 10.0, 0, UINT16_MAX);
-	st->x_dmm = (int32_t)round_sat(pos.x, 10.0, INT32_MIN, INT32_MAX);
-	st->y_dmm = (int32_t)round_sat(pos.y, 10.0, INT32_MIN, INT32_MAX);
-	st->theta_mdeg = (int32_t)round_sat(pos.theta, 1000.0, INT32_MIN, INT32_MAX);
-	/* Speed: the commanded body velocity of the last tick. */
-	st->vx_mm_s = rate_i16(d.cmd_twist_pt.vx_pt, v->cfg.tick_hz, 1);
-	st->vy_mm_s = rate_i16(d.cmd_twist_pt.vy_pt, v->cfg.tick_hz, 1);
-	st->w_ddeg_s = rate_i16(d.cmd_twist_pt.w_pt, v->cfg.tick_hz, 10);
+	stream_read(v, st);
 }
 
 /* ---- the unit's side --------------------------------------------------- */
@@ -300,7 +247,7 @@ static void status_send(canlink_t *c)
 
 	canlink_status_read(c->v, &st);
 	st.counter = c->status_counter++;
-	for (unsigned i = 0; i < 3; i++) {
+	for (unsigned i = 0; i < STREAM_CAN_FRAMES; i++) {
 		canlink_frame_t f;
 
 		canlink_status_frame(&st, c->cfg.node, i, &f);

@@ -115,6 +115,9 @@ typedef void (*frame_write_fn)(void *ctx, const uint8_t *data, size_t n);
 /* Runs one console line (WIRE_OP_CONSOLE): false when it gets no reply
  * (blank, comment), else the reply line in reply. */
 typedef bool (*frame_line_fn)(void *ctx, const char *line, char *reply, size_t cap);
+/* A stream subscription (WIRE_OP_STREAM, stream.h): returns the answer's
+ * length in resp, or 0 with *st the NAK. */
+typedef size_t (*frame_stream_fn)(void *ctx, const uint8_t *p, size_t len, uint8_t *resp, int *st);
 
 typedef struct {
 	uint32_t executed;   /* requests run */
@@ -130,6 +133,8 @@ typedef struct {
 	void *wctx;
 	frame_line_fn line; /* WIRE_OP_CONSOLE; NULL: NAK opcode */
 	void *lctx;
+	frame_stream_fn stream; /* WIRE_OP_STREAM; NULL: NAK opcode */
+	void *sctx;
 	bool have_last;
 	uint8_t last_seq, last_op;
 	uint16_t last_crc;
@@ -147,6 +152,12 @@ static inline void frame_srv_set_line(frame_srv_t *s, frame_line_fn fn, void *ct
 {
 	s->line = fn;
 	s->lctx = ctx;
+}
+/* Stream subscriptions (WIRE_OP_STREAM) go to fn. */
+static inline void frame_srv_set_stream(frame_srv_t *s, frame_stream_fn fn, void *ctx)
+{
+	s->stream = fn;
+	s->sctx = ctx;
 }
 static inline void frame_srv_feed(frame_srv_t *s, const uint8_t *data, size_t n, uint32_t now_ms)
 {

@@ -71,6 +71,8 @@ static void srv_frame(void *ctx, const frame_t *f)
 	}
 	if (f->op == WIRE_OP_CONSOLE)
 		n = run_line(s, f, resp, sizeof(resp), &st);
+	else if (f->op == WIRE_OP_STREAM && s->stream)
+		n = s->stream(s->sctx, f->payload, f->len, resp, &st);
 	else
 		n = wire_dispatch(s->v, f->op, f->payload, f->len, resp, sizeof(resp), &st);
 	if (st != WIRE_ST_OK) {

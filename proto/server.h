@@ -23,6 +23,7 @@
 #include "canlink.h"
 #include "console.h"
 #include "link.h"
+#include "stream.h"
 
 /* Most CAN frames taken per poll, so that a flood cannot hold up the tick;
  * the rest wait in the port (and overflow there) until the next poll. */
@@ -77,6 +78,11 @@ typedef struct {
 	bool more;		     /* the last poll left takeable bytes: poll again */
 	bool blocked;		     /* ... or left them for want of the port */
 	server_serial_stats_t st;
+	/* The telemetry stream (stream.h): at most one of its frames waits in
+	 * the queue at a time, so an answer waits behind one at most. */
+	stream_sub_t sub;
+	uint32_t q_put_total, q_sent_total; /* bytes into the queue, out to the port */
+	uint32_t stream_end;		    /* q_put_total after the last stream frame */
 } server_serial_t;
 
 struct vs_server {
@@ -112,6 +118,10 @@ void server_serve_serial(vs_server_t *s, server_serial_t *ss, const vs_link_t *i
  * leaves received bytes until the port takes answers (do not wait for
  * POLLIN), and whether it can take more now (poll again at once). */
 size_t server_serial_queued(const vs_server_t *s);
+/* The serial line's speed, for the stream's budget (default STREAM_BAUD). */
+void server_serial_set_baud(vs_server_t *s, uint32_t baud);
+/* The stream's subscription (NULL when the serial link is not served). */
+const stream_sub_t *server_serial_stream(const vs_server_t *s);
 bool server_serial_blocked(const vs_server_t *s);
 bool server_serial_more(const vs_server_t *s);
 /* The CAN command link on port, its state in can (server_can.c). Returns

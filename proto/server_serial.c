@@ -20,25 +20,31 @@ static server_serial_t *ss_of(const vs_server_t *s)
 	return s->poll_serial ? s->serial.port.io.ctx : NULL;
 }
 
+static void q_copy(server_serial_t *ss, const uint8_t *b, size_t n)
+{
+	size_t at = (ss->q_at + ss->q_len) % SERVER_SERIAL_TXQ;
+	size_t first = SERVER_SERIAL_TXQ - at < n ? SERVER_SERIAL_TXQ - at : n;
+
+	memcpy(ss->q + at, b, first);
+	memcpy(ss->q, b + first, n - first);
+	ss->q_len += n;
+	ss->q_put_total += (uint32_t)n;
+	if (ss->q_len > ss->st.max_queued)
+		ss->st.max_queued = (uint32_t)ss->q_len;
+}
+
 /* The port's write: the answer goes into the queue whole. Steps are taken
  * only while the queue has room for their worst, so nothing is refused
  * here (the port would count it as txdrop). */
 static size_t q_put(void *ctx, const uint8_t *b, size_t n)
 {
 	server_serial_t *ss = ctx;
-	size_t at, first;
 
 	if (n > SERVER_SERIAL_TXQ - ss->q_len)
 		return 0;
-	at = (ss->q_at + ss->q_len) % SERVER_SERIAL_TXQ;
-	first = SERVER_SERIAL_TXQ - at < n ? SERVER_SERIAL_TXQ - at : n;
-	memcpy(ss->q + at, b, first);
-	memcpy(ss->q, b + first, n - first);
-	ss->q_len += n;
+	q_copy(ss, b, n);
 	ss->answers++;
 	ss->ans_bytes += (uint32_t)n;
-	if (ss->q_len > ss->st.max_queued)
-		ss->st.max_queued = (uint32_t)ss->q_len;
 	return n;
 }
 
@@ -54,6 +60,7 @@ static void q_flush(server_serial_t *ss)
 			break;
 		ss->q_at = (ss->q_at + k) % SERVER_SERIAL_TXQ;
 		ss->q_len -= k;
+		ss->q_sent_total += (uint32_t)k;
 	}
 }
 
@@ -81,6 +88,42 @@ static bool room(server_serial_t *ss)
 	return ss->q_len <= SERVER_SERIAL_BACKLOG;
 }
 
+/* A subscription request (frame_stream_fn): at the tick count now. */
+static size_t stream_req(void *ctx, const uint8_t *p, size_t len, uint8_t *resp, int *st)
+{
+	vs_server_t *s = ctx;
+	server_serial_t *ss = ss_of(s);
+
+	return stream_subscribe(&ss->sub, s->v->cfg.tick_hz, s->v->ticks, p, len, resp, st);
+}
+
+/* A stream frame when one is due, ahead of this poll's answers, unless the
+ * last one has not left yet (the line is behind: the slot is skipped, its
+ * sequence number too, and counted), so that no answer ever waits behind
+ * more than one stream frame. */
+static void stream_emit(vs_server_t *s, server_serial_t *ss)
+{
+	uint8_t payload[STREAM_PAYLOAD_MAX], out[STREAM_FRAME_MAX];
+	stream_sample_t smp;
+	uint8_t seq;
+	size_t n;
+
+	if (!stream_due(&ss->sub, s->v->ticks))
+		return;
+	seq = ss->sub.seq++;
+	if ((int32_t)(ss->stream_end - ss->q_sent_total) > 0 ||
+	    SERVER_SERIAL_TXQ - ss->q_len < sizeof(out)) {
+		ss->sub.skipped++;
+		return;
+	}
+	stream_read(s->v, &smp);
+	n = stream_encode(&smp, ss->sub.mask, s->v->ticks, payload, sizeof(payload));
+	n = frame_encode(out, sizeof(out), seq, WIRE_OP_STREAM, payload, n);
+	q_copy(ss, out, n);
+	ss->stream_end = ss->q_put_total;
+	ss->sub.sent++;
+}
+
 static void poll_serial(vs_server_t *s, uint32_t now_ms)
 {
 	server_serial_t *ss = ss_of(s);
@@ -91,6 +134,8 @@ static void poll_serial(vs_server_t *s, uint32_t now_ms)
 	ss->answers = ss->ans_bytes = 0;
 	ss->more = ss->blocked = false;
 	ss->st.polls++;
+	q_flush(ss);
+	stream_emit(s, ss);
 	q_flush(ss);
 	for (;;) {
 		size_t k;
@@ -151,8 +196,25 @@ void server_serve_serial(vs_server_t *s, server_serial_t *ss, const vs_link_t *i
 
 	memset(ss, 0, sizeof(*ss));
 	ss->io = *io;
+	stream_sub_init(&ss->sub, STREAM_BAUD);
 	link_init(&s->serial, &s->con, &q);
+	frame_srv_set_stream(&s->serial.fs, stream_req, s);
 	s->poll_serial = poll_serial;
+}
+
+void server_serial_set_baud(vs_server_t *s, uint32_t baud)
+{
+	server_serial_t *ss = ss_of(s);
+
+	if (ss)
+		ss->sub.baud = baud ? baud : STREAM_BAUD;
+}
+
+const stream_sub_t *server_serial_stream(const vs_server_t *s)
+{
+	const server_serial_t *ss = ss_of(s);
+
+	return ss ? &ss->sub : NULL;
 }
 
 size_t server_serial_queued(const vs_server_t *s)

@@ -7,7 +7,7 @@
 #include "numparse.h"
 
 static const char *const status_names[WIRE_ST_COUNT] = {
-    "ok", "crc", "oversize", "length", "opcode", "value", "truncated", "space",
+    "ok", "crc", "oversize", "length", "opcode", "value", "truncated", "space", "rate",
 };
 
 const char *wire_status_name(int st)

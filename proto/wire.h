@@ -48,6 +48,11 @@
  * reply line's bytes ("ok ..." or "error ..."), no newline; empty for a
  * blank line or a comment. Serial frames only (not CAN). */
 #define WIRE_OP_CONSOLE 0x7E
+/* Not an operation: the telemetry stream (stream.h, docs/protocol.md). A
+ * request subscribes (u16 group mask, u16 period in ms; mask 0
+ * unsubscribes); the unit's own stream frames carry this opcode without
+ * the response flag. Serial frames only (not CAN). */
+#define WIRE_OP_STREAM 0x7D
 
 /* Status of a request: 0 accepted, else the reason it was refused (NAK). */
 typedef enum {
@@ -59,6 +64,7 @@ typedef enum {
 	WIRE_ST_VALUE = 5,     /* malformed field (boolean not 0/1, bad string or count) */
 	WIRE_ST_TRUNCATED = 6, /* frame not completed within the inter-byte timeout */
 	WIRE_ST_SPACE = 7,     /* output buffer too small (a local error, never sent) */
+	WIRE_ST_RATE = 8,      /* the line cannot carry the stream asked for */
 	WIRE_ST_COUNT
 } wire_status_t;
 

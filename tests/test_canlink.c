@@ -873,12 +873,14 @@ static void test_status_frames(void **state)
 	boot_all(3, 10);
 	sim_run_ms(&U.sim, 1000);
 	/* polls at 1..1000 ms; groups at 1, 101, ... 901 ms */
-	assert_int_equal(pending(), 30);
+	assert_int_equal(pending(), 50);
 	for (unsigned g = 0; g < 10; g++) {
-		canlink_frame_t a = pop(), b = pop(), c = pop();
+		canlink_frame_t a = pop(), b = pop(), c = pop(), d = pop(), e = pop();
 		assert_int_equal(a.id, 0x183);
 		assert_int_equal(b.id, 0x283);
 		assert_int_equal(c.id, 0x383);
+		assert_int_equal(d.id, 0x483);
+		assert_int_equal(e.id, 0x683);
 		assert_int_equal(a.dlc, 8);
 		/* state 0x0019, no alarm, counter g, about 25.2 V (the pack
 		 * model sags a little), 0 mm/s */
@@ -889,6 +891,9 @@ static void test_status_frames(void **state)
 		static const uint8_t zero[8] = {0};
 		assert_memory_equal(b.data, zero, 8);
 		assert_memory_equal(c.data, zero, 8);
+		/* at rest, nothing queued, no alarm, io.xml's outputs off */
+		assert_memory_equal(d.data, zero, 8);
+		assert_memory_equal(e.data, zero, 8);
 	}
 	assert_int_equal(U.link.stats.status_sent, 10);
 
@@ -961,7 +966,15 @@ static void test_status_layout(void **state)
 			       .w_ddeg_s = -451,
 			       .x_dmm = 123456,
 			       .y_dmm = -2,
-			       .theta_mdeg = -179999};
+			       .theta_mdeg = -179999,
+			       .mvx_mm_s = -249,
+			       .mvy_mm_s = 2,
+			       .mw_ddeg_s = -450,
+			       .queue = 7,
+			       .alarm_type = 1,
+			       .alarm_code = 204,
+			       .inputs = 0x8001,
+			       .outputs = 0x0102};
 	canlink_status_t back;
 	canlink_frame_t f;
 
@@ -983,6 +996,16 @@ static void test_status_layout(void **state)
 	assert_int_equal(f.id, 0x389);
 	assert_memory_equal(f.data, "\xE1\x40\xFD\xFF\x03\x00\x3D\xFE", 8);
 	assert_int_equal(canlink_status_decode(&f, 9, &back), 2);
+	canlink_status_frame(&st, 9, 3, &f);
+	/* -249 = 0xFF07, 2, -450 = 0xFE3E, queue 7, a fault */
+	assert_int_equal(f.id, 0x489);
+	assert_memory_equal(f.data, "\x07\xFF\x02\x00\x3E\xFE\x07\x01", 8);
+	assert_int_equal(canlink_status_decode(&f, 9, &back), 3);
+	canlink_status_frame(&st, 9, 4, &f);
+	/* 204 = 0xCC, inputs 0x8001, outputs 0x0102 */
+	assert_int_equal(f.id, 0x689);
+	assert_memory_equal(f.data, "\xCC\x00\x00\x00\x01\x80\x02\x01", 8);
+	assert_int_equal(canlink_status_decode(&f, 9, &back), 4);
 	assert_memory_equal(&back, &st, sizeof(st));
 	/* another node's status, or a short frame, is not ours */
 	assert_int_equal(canlink_status_decode(&f, 8, &back), -1);

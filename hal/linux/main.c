@@ -441,6 +441,8 @@ static int open_links(app_t *a, const opts_t *o)
 	console_set_keep(&a->srv.con, &a->keep);
 	vs_link_t lio = {port_read, port_write, a};
 	server_serve_serial(&a->srv, &a->ser, &lio);
+	if (o->port) /* the stream's budget is the line's */
+		server_serial_set_baud(&a->srv, (uint32_t)o->baud);
 
 	a->can.fd = -1;
 	if (!o->can_iface)

@@ -39,7 +39,7 @@ static bool take_status(can_ctx_t *k, const canlink_frame_t *f)
 		k->st_have = 1u;
 	else if (k->st_have & 1u)
 		k->st_have |= 1u << which;
-	if (k->st_have == 7u) {
+	if (k->st_have == (1u << STREAM_CAN_FRAMES) - 1u) {
 		k->st_last = k->st_work;
 		k->st_fresh = true;
 		k->st_have = 0;
@@ -352,9 +352,10 @@ int vc_open_can(vc_client_t *c, const char *iface, unsigned node)
 	sockcan_t *s = malloc(sizeof(*s));
 	if (!s)
 		return VC_E_LINK;
-	uint32_t ids[4] = {CANLINK_ID_RESPONSE + node, CANLINK_ID_STATUS_A + node,
-			   CANLINK_ID_STATUS_B + node, CANLINK_ID_STATUS_C + node};
-	if (sockcan_open(s, iface, ids, 4) < 0) {
+	uint32_t ids[6] = {CANLINK_ID_RESPONSE + node, CANLINK_ID_STATUS_A + node,
+			   CANLINK_ID_STATUS_B + node, CANLINK_ID_STATUS_C + node,
+			   CANLINK_ID_STATUS_D + node, CANLINK_ID_STATUS_E + node};
+	if (sockcan_open(s, iface, ids, 6) < 0) {
 		int e = errno;
 		free(s);
 		errno = e;

@@ -1,0 +1,396 @@
+/* The telemetry value set and its two encodings (stream.h, stream.def). */
+#include "stream.h"
+
+#include <stddef.h>
+#include <string.h>
+
+#include "wire.h"
+
+#define STREAM_FIELD(name, group, type, frame, off, unit, what)                                    \
+	{#name,                                                                                    \
+	 STREAM_G_##group,                                                                         \
+	 STREAM_T_##type,                                                                          \
+	 frame,                                                                                    \
+	 off,                                                                                      \
+	 (uint16_t)offsetof(stream_sample_t, name),                                                \
+	 unit,                                                                                     \
+	 what},
+const stream_field_t stream_fields[] = {
+#include "stream.def"
+};
+#undef STREAM_FIELD
+const unsigned stream_field_count = sizeof(stream_fields) / sizeof(stream_fields[0]);
+
+const char *const stream_group_names[STREAM_GROUPS] = {"pose",	"cmd",	   "meas", "state",
+						       "alarm", "battery", "io",   "queue"};
+
+size_t stream_type_size(unsigned type)
+{
+	static const uint8_t size[] = {2, 4, 1, 2, 4};
+
+	return type < sizeof(size) ? size[type] : 0;
+}
+
+size_t stream_payload_len(uint16_t mask)
+{
+	size_t n = STREAM_HDR;
+
+	for (unsigned i = 0; i < stream_field_count; i++)
+		if (mask & (1u << stream_fields[i].group))
+			n += stream_type_size(stream_fields[i].type);
+	return n;
+}
+
+size_t stream_frame_bytes(uint16_t mask)
+{
+	return 7u + stream_payload_len(mask);
+}
+
+bool stream_fits(uint16_t mask, uint32_t period_ms, uint32_t baud)
+{
+	/* bytes / period <= baud / 10 * share, in integers */
+	uint64_t need = (uint64_t)stream_frame_bytes(mask) * 10000u * STREAM_SHARE_DEN;
+	uint64_t have = (uint64_t)period_ms * baud * STREAM_SHARE_NUM;
+
+	return need <= have;
+}
+
+uint32_t stream_min_period_ms(uint16_t mask, uint32_t baud)
+{
+	uint64_t need = (uint64_t)stream_frame_bytes(mask) * 10000u * STREAM_SHARE_DEN;
+	uint64_t per = (uint64_t)baud * STREAM_SHARE_NUM;
+
+	if (!mask || !per)
+		return 0;
+	return (uint32_t)((need + per - 1u) / per);
+}
+
+/* ---- reading the unit ---------------------------------------------------- */
+
+/* x * mult rounded half away from zero, saturated to [lo, hi]; NaN reads 0. */
+static int64_t real_round(vs_real_t x, int32_t mult, int64_t lo, int64_t hi)
+{
+#ifdef VS_REAL_Q32
+	int64_t r;
+
+	if (x == VS_REAL_NAN)
+		return 0;
+	if (x > INT64_MAX / mult || x < -(INT64_MAX / mult))
+		return x < 0 ? lo : hi;
+	r = x * mult;
+	r = r >= 0 ? (r + ((int64_t)1 << 31)) >> 32 : -((-r + ((int64_t)1 << 31)) >> 32);
+#else
+	double y = x * (double)mult;
+	int64_t r;
+
+	if (y != y)
+		return 0;
+	if (y <= (double)lo)
+		return lo;
+	if (y >= (double)hi)
+		return hi;
+	r = (int64_t)(y < 0 ? y - 0.5 : y + 0.5);
+#endif
+	return r < lo ? lo : r > hi ? hi : r;
+}
+
+/* Q32 per tick -> units per second, rounded, saturated to int16. */
+static int16_t rate_i16(q32_t per_tick, uint32_t tick_hz, int32_t mult)
+{
+	int64_t v = per_tick * (int64_t)tick_hz * mult;
+	int64_t half = (int64_t)1 << 31;
+	int64_t r = v >= 0 ? (v + half) >> 32 : -((-v + half) >> 32);
+
+	return (int16_t)(r > INT16_MAX ? INT16_MAX : r < INT16_MIN ? INT16_MIN : r);
+}
+
+/* Bit k: the k-th input (or output) of the io table is non-zero. */
+static void read_io(vehicle_t *v, stream_sample_t *s)
+{
+	unsigned kin = 0, kout = 0;
+
+	for (unsigned i = 0; i < v->cfg.num_io && i < VS_MAX_IO; i++) {
+		const vs_io_def_t *d = &v->cfg.io[i];
+		uint32_t val = 0;
+
+		if (d->dir == VS_IO_IN) {
+			if (kin < 16 && v->hal.ops->io_read(v->hal.ctx, d->id, &val) && val)
+				s->inputs |= (uint16_t)(1u << kin);
+			kin++;
+		} else {
+			if (kout < 16 && v->out_shadow[i])
+				s->outputs |= (uint16_t)(1u << kout);
+			kout++;
+		}
+	}
+}
+
+void stream_read(vehicle_t *v, stream_sample_t *s)
+{
+	vs_position_t pos = {0, 0, 0};
+	char msg[VS_STATE_MSG_MAX];
+	vs_alarm_t newest;
+	int16_t state = 0, nalarms = 0;
+	uint16_t got = 0;
+	vs_real_t batt = 0;
+	vs_diag_t d;
+	uint32_t hz = v->cfg.tick_hz;
+
+	memset(s, 0, sizeof(*s));
+	memset(&d, 0, sizeof(d));
+	vs_getState(v, &state, msg);
+	vs_getActiveAlarm(v, 1, &nalarms, &newest, &got);
+	vs_getBatteryVoltage(v, &batt);
+	vs_getPosition(v, &pos);
+	vehicle_diag(v, &d);
+	s->state = (uint16_t)state;
+	s->alarms = nalarms < 0 ? 0 : nalarms > 255 ? 255 : (uint8_t)nalarms;
+	if (got) {
+		s->alarm_code = newest.code;
+		s->alarm_type = (uint8_t)newest.type;
+	}
+	s->battery_cV = (uint16_t)real_round(batt, 10, 0, UINT16_MAX);
+	s->x_dmm = (int32_t)real_round(pos.x, 10, INT32_MIN, INT32_MAX);
+	s->y_dmm = (int32_t)real_round(pos.y, 10, INT32_MIN, INT32_MAX);
+	s->theta_mdeg = (int32_t)real_round(pos.theta, 1000, INT32_MIN, INT32_MAX);
+	s->vx_mm_s = rate_i16(d.cmd_twist_pt.vx_pt, hz, 1);
+	s->vy_mm_s = rate_i16(d.cmd_twist_pt.vy_pt, hz, 1);
+	s->w_ddeg_s = rate_i16(d.cmd_twist_pt.w_pt, hz, 10);
+	s->mvx_mm_s = rate_i16(d.meas_twist_pt.vx_pt, hz, 1);
+	s->mvy_mm_s = rate_i16(d.meas_twist_pt.vy_pt, hz, 1);
+	s->mw_ddeg_s = rate_i16(d.meas_twist_pt.w_pt, hz, 10);
+	s->queue = d.queue_len;
+	read_io(v, s);
+}
+
+/* ---- fields ---------------------------------------------------------------- */
+
+int64_t stream_get(const stream_sample_t *s, const stream_field_t *f)
+{
+	const uint8_t *p = (const uint8_t *)s + f->at;
+
+	switch (f->type) {
+	case STREAM_T_I16: {
+		int16_t x;
+		memcpy(&x, p, sizeof(x));
+		return x;
+	}
+	case STREAM_T_I32: {
+		int32_t x;
+		memcpy(&x, p, sizeof(x));
+		return x;
+	}
+	case STREAM_T_U8:
+		return *p;
+	case STREAM_T_U16: {
+		uint16_t x;
+		memcpy(&x, p, sizeof(x));
+		return x;
+	}
+	default: {
+		uint32_t x;
+		memcpy(&x, p, sizeof(x));
+		return x;
+	}
+	}
+}
+
+void stream_set(stream_sample_t *s, const stream_field_t *f, int64_t val)
+{
+	uint8_t *p = (uint8_t *)s + f->at;
+
+	switch (f->type) {
+	case STREAM_T_I16: {
+		int16_t x = (int16_t)val;
+		memcpy(p, &x, sizeof(x));
+		break;
+	}
+	case STREAM_T_I32: {
+		int32_t x = (int32_t)val;
+		memcpy(p, &x, sizeof(x));
+		break;
+	}
+	case STREAM_T_U8:
+		*p = (uint8_t)val;
+		break;
+	case STREAM_T_U16: {
+		uint16_t x = (uint16_t)val;
+		memcpy(p, &x, sizeof(x));
+		break;
+	}
+	default: {
+		uint32_t x = (uint32_t)val;
+		memcpy(p, &x, sizeof(x));
+		break;
+	}
+	}
+}
+
+/* Little-endian, the field's width. */
+static void put_le(uint8_t *p, int64_t val, size_t n)
+{
+	uint64_t u = (uint64_t)val;
+
+	for (size_t i = 0; i < n; i++)
+		p[i] = (uint8_t)(u >> (8u * i));
+}
+
+static int64_t get_le(const uint8_t *p, unsigned type)
+{
+	size_t n = stream_type_size(type);
+	uint64_t u = 0;
+
+	for (size_t i = 0; i < n; i++)
+		u |= (uint64_t)p[i] << (8u * i);
+	if (type == STREAM_T_I16)
+		return (int16_t)(uint16_t)u;
+	if (type == STREAM_T_I32)
+		return (int32_t)(uint32_t)u;
+	return (int64_t)u;
+}
+
+/* ---- serial ---------------------------------------------------------------- */
+
+size_t stream_encode(const stream_sample_t *s, uint16_t mask, uint32_t tick, uint8_t *out,
+		     size_t cap)
+{
+	size_t n = STREAM_HDR;
+
+	if (cap < stream_payload_len(mask))
+		return 0;
+	wire_put_u16(out, mask);
+	wire_put_u32(out + 2, tick);
+	for (unsigned g = 0; g < STREAM_GROUPS; g++) {
+		if (!(mask & (1u << g)))
+			continue;
+		for (unsigned i = 0; i < stream_field_count; i++) {
+			const stream_field_t *f = &stream_fields[i];
+			size_t k = stream_type_size(f->type);
+
+			if (f->group != g)
+				continue;
+			put_le(out + n, stream_get(s, f), k);
+			n += k;
+		}
+	}
+	return n;
+}
+
+int stream_decode(const uint8_t *p, size_t len, uint16_t *mask, uint32_t *tick, stream_sample_t *s)
+{
+	size_t n = STREAM_HDR;
+	uint16_t m;
+
+	if (len < STREAM_HDR)
+		return -1;
+	m = wire_get_u16(p);
+	if ((m & ~STREAM_MASK_ALL) || len != stream_payload_len(m))
+		return -1;
+	*mask = m;
+	*tick = wire_get_u32(p + 2);
+	for (unsigned g = 0; g < STREAM_GROUPS; g++) {
+		if (!(m & (1u << g)))
+			continue;
+		for (unsigned i = 0; i < stream_field_count; i++) {
+			const stream_field_t *f = &stream_fields[i];
+
+			if (f->group != g)
+				continue;
+			stream_set(s, f, get_le(p + n, f->type));
+			n += stream_type_size(f->type);
+		}
+	}
+	return 0;
+}
+
+/* ---- CAN ------------------------------------------------------------------- */
+
+void stream_can_put(const stream_sample_t *s, unsigned which, uint8_t data[8])
+{
+	memset(data, 0, 8);
+	if (which == 0)
+		data[STREAM_CAN_COUNTER_AT] = s->counter;
+	for (unsigned i = 0; i < stream_field_count; i++) {
+		const stream_field_t *f = &stream_fields[i];
+
+		if (f->can_frame == which)
+			put_le(data + f->can_offset, stream_get(s, f), stream_type_size(f->type));
+	}
+}
+
+void stream_can_get(const uint8_t data[8], unsigned which, stream_sample_t *s)
+{
+	if (which == 0)
+		s->counter = data[STREAM_CAN_COUNTER_AT];
+	for (unsigned i = 0; i < stream_field_count; i++) {
+		const stream_field_t *f = &stream_fields[i];
+
+		if (f->can_frame == which)
+			stream_set(s, f, get_le(data + f->can_offset, f->type));
+	}
+}
+
+/* ---- subscription ---------------------------------------------------------- */
+
+void stream_sub_init(stream_sub_t *ss, uint32_t baud)
+{
+	memset(ss, 0, sizeof(*ss));
+	ss->baud = baud ? baud : STREAM_BAUD;
+}
+
+size_t stream_subscribe(stream_sub_t *ss, uint32_t tick_hz, uint32_t now_tick, const uint8_t *p,
+			size_t len, uint8_t *resp, int *st)
+{
+	uint16_t mask, period;
+	uint32_t ticks = 0;
+
+	*st = WIRE_ST_OK;
+	if (len != STREAM_REQ_LEN) {
+		*st = WIRE_ST_LENGTH;
+		return 0;
+	}
+	mask = wire_get_u16(p);
+	period = wire_get_u16(p + 2);
+	if (mask) {
+		/* A period of whole ticks, at least one. */
+		uint32_t t = (uint32_t)period * tick_hz;
+
+		ticks = t / 1000u;
+		if ((mask & ~STREAM_MASK_ALL) || !ticks || t % 1000u) {
+			*st = WIRE_ST_VALUE;
+			return 0;
+		}
+		if (!stream_fits(mask, period, ss->baud)) {
+			*st = WIRE_ST_RATE;
+			return 0;
+		}
+	} else {
+		period = 0;
+	}
+	ss->mask = mask;
+	ss->period_ms = period;
+	ss->period_ticks = ticks;
+	/* The first frame at the end of the next tick. */
+	ss->next_tick = now_tick + 1u;
+	ss->seq = 0;
+	wire_put_u16(resp, mask);
+	wire_put_u16(resp + 2, period);
+	wire_put_u16(resp + 4, (uint16_t)(mask ? stream_frame_bytes(mask) : 0));
+	wire_put_u16(resp + 6, (uint16_t)stream_min_period_ms(mask, ss->baud));
+	wire_put_u16(resp + 8, (uint16_t)tick_hz);
+	return STREAM_RESP_LEN;
+}
+
+bool stream_due(stream_sub_t *ss, uint32_t now_tick)
+{
+	uint32_t late;
+
+	if (!ss->mask || (int32_t)(now_tick - ss->next_tick) < 0)
+		return false;
+	/* Slots passed without a poll: skipped, their numbers too. */
+	late = (now_tick - ss->next_tick) / ss->period_ticks;
+	ss->seq = (uint8_t)(ss->seq + late);
+	ss->skipped += late;
+	ss->next_tick += (late + 1u) * ss->period_ticks;
+	return true;
+}
