@@ -28,12 +28,12 @@ static bool part_erase(uint32_t page, uint32_t bytes)
 	return true;
 }
 
-/* Clears the bits of w that are 0 in the word at off (a flash cell only
- * goes 1 -> 0); bytes: how many of its bytes (a program cut short). */
-static bool part_program(uint32_t off, const uint8_t *w, uint32_t bytes)
+/* Clears the bits of the word at off that are 0 in w (a flash cell only
+ * goes 1 -> 0). */
+static bool part_program(uint32_t off, const uint8_t *w)
 {
 	volatile uint8_t *p = __store_start + off;
-	for (uint32_t i = 0; i < bytes; i++)
+	for (uint32_t i = 0; i < FLASHSTORE_WORD; i++)
 		p[i] = (uint8_t) ~(part_read(off + i) & w[i]);
 	return true;
 }
@@ -104,11 +104,14 @@ static bool fl_program(void *ctx, uint32_t off, const void *buf, uint32_t n)
 				return false;
 #ifdef BOARD_STORE_CUT
 		if (cut_now()) {
-			part_program(off + w, b + w, FLASHSTORE_WORD / 2u);
+			uint8_t half[FLASHSTORE_WORD]; /* its odd bits not yet cleared */
+			for (uint32_t i = 0; i < FLASHSTORE_WORD; i++)
+				half[i] = b[w + i] | 0xAAu;
+			part_program(off + w, half);
 			halt();
 		}
 #endif
-		if (!part_program(off + w, b + w, FLASHSTORE_WORD))
+		if (!part_program(off + w, b + w))
 			return false;
 	}
 	return true;

@@ -17,6 +17,11 @@ or drive faults to inject, the reference wheel), then vehiclectl with binary
 frames, then checks what each request and each tick cost on the board
 (board_cost in hal/cortexm/board_main.c, read through QEMU's QMP monitor).
 
+Then the configuration store across resets: $config save and a system
+reset through the monitor, and a reset in the middle of a save
+(vehicle-cut.elf, the store's cut hook), each on a fresh QEMU (an erased
+store).
+
 Then the Cortex-M0 image on mps2-an385: QEMU has no ARMv6-M board with this
 UART, so a Cortex-M3 runs it; that proves it boots and answers, not that the
 part's instruction set suffices.
@@ -928,6 +933,131 @@ def c_omni_moves(b):
     assert b.ticks()[1] == 0
 
 
+# ---- the configuration store across resets (hal/cortexm/flashstore.c) --------
+
+TABLE = "0x916B11C3"  # vs_config_schema of this table
+DIAG_END = "odom 0.000 0.000 0.000"  # $diag with no " config ..." tail
+
+
+def store_line(seq, applied, torn=False):
+    return "ok store loaded seq %d schema %s applied %d dropped 0 table %s%s" % (
+        seq, TABLE, applied, TABLE, " torn" if torn else "")
+
+
+def reboot(b):
+    """A system reset through QEMU's monitor, then the board's time until it
+    has booted again and ticked (board_cost starts over from zero)."""
+    assert b.costs()["requests"] > 0
+    b.monitor("system_reset")
+    deadline = time.monotonic() + REPLY_S
+    while True:
+        c = b.costs()
+        if c["requests"] == 0 and c["ticks"] >= 20:
+            break
+        assert time.monotonic() < deadline, "no boot after the reset"
+        time.sleep(0.02)
+    left = b.drain()
+    assert left == b"", "bytes after the reset: %r" % left
+
+
+def fresh_board(elf, tmp):
+    """A new QEMU: its store region powers on erased (a board from the
+    factory)."""
+    b = Board(elf, "mps2-an386", tempfile.mkdtemp(dir=tmp))
+    expect(b, "$config store", "ok store empty table %s" % TABLE)
+    return b
+
+
+def c_config_save_reset(elf, tmp):
+    """$config NAME VALUE, $config save, a system reset: the saved values
+    are in force (a restart field's too), an unsaved change is gone, the
+    store says which record; a save of the defaults reads back as none
+    changed."""
+    b = fresh_board(elf, tmp)
+    try:
+        expect(b, "$config wheel_diameter_mm 160", "ok wheel_diameter_mm 160.000")
+        expect(b, "$config tick_hz 500", "ok tick_hz 1000 pending 500")
+        expect(b, "$config save", "ok saved 2 tick_hz wheel_diameter_mm")
+        expect(b, "$config following_error_mm 60", "ok following_error_mm 60.000")
+        expect(b, "$config diff",
+               "ok unsaved 1 following_error_mm changed 3 tick_hz wheel_diameter_mm "
+               "following_error_mm pending 1 tick_hz")
+        reboot(b)
+        expect(b, "$config store", store_line(1, 2))
+        expect(b, "$config wheel_diameter_mm", "ok wheel_diameter_mm 160.000")
+        expect(b, "$config tick_hz", "ok tick_hz 500")
+        expect(b, "$config following_error_mm", "ok following_error_mm 50.000")
+        expect(b, "$config diff",
+               "ok unsaved 0 changed 2 tick_hz wheel_diameter_mm pending 0")
+        assert b.ex("$diag").endswith(DIAG_END), "a config tail in $diag"
+        expect(b, "getActiveAlarm 16", "ok true 0 0")
+        # The unit runs at the saved rate: SysTick's reload for 500 Hz.
+        rvr = re.findall(r"\b0x([0-9a-f]{8})\b", b.monitor("xp /1wx 0xe000e014"))
+        assert int(rvr[0], 16) == CPU_HZ // 500 - 1, "SysTick reload %s" % rvr
+        # It moves with the saved wheel: 100 mm commanded is 100 mm.
+        ready(b)
+        expect(b, "moveForward 100", "ok true")
+        b.settle(3000)
+        expect_pos(b, 100, 0, 0)
+        expect(b, "setServo false", "ok true")
+        expect(b, "$config defaults", "ok defaults pending 1")
+        expect(b, "$config save", "ok saved 0")
+        reboot(b)
+        expect(b, "$config store", store_line(2, 0))
+        expect(b, "$config wheel_diameter_mm", "ok wheel_diameter_mm 150.000")
+        expect(b, "$config tick_hz", "ok tick_hz 1000")
+    finally:
+        b.close()
+
+
+# The third save of c_config_cut writes wheel_diameter_mm alone: a 33-byte
+# payload. Its steps (flashstore.h): 1 the page erased, 2-5 the payload's
+# four whole double words, 6 its last part word, 7-9 the header, 10 the
+# commit word. Cut at 11: no such step, the save completes.
+CUTS = (1, 4, 6, 9, 10, 11)
+
+
+def c_config_cut(elf, tmp, k):
+    """A reset in the middle of a save (the test image's $storecut K: step K
+    done half, the board stopped until the reset): the field reads the
+    value of the last save or of this one, exactly, never the defaults; a
+    slot left half written is reported (torn) as on the host, and the next
+    save clears it."""
+    b = fresh_board(elf, tmp)
+    try:
+        expect(b, "$config wheel_diameter_mm 160", "ok wheel_diameter_mm 160.000")
+        expect(b, "$config save", "ok saved 1 wheel_diameter_mm")
+        expect(b, "$config wheel_diameter_mm 170", "ok wheel_diameter_mm 170.000")
+        expect(b, "$config save", "ok saved 1 wheel_diameter_mm")
+        expect(b, "$config wheel_diameter_mm 180", "ok wheel_diameter_mm 180.000")
+        expect(b, "$storecut %d" % k, "ok cut")
+        n = b.costs()["requests"]
+        b.write(b"$config save\n")
+        if k > 10:
+            assert b.readline() == "ok saved 1 wheel_diameter_mm"
+        else:
+            # stopped in the save: no reply, the request never counted
+            assert b.drain() == b"", "a reply from a save cut at step %d" % k
+            assert b.costs()["requests"] == n, "the save cut at step %d ended" % k
+        reboot(b)
+        done = k > 10
+        # Cut in the erase (its first half, where the older record lay):
+        # that slot reads erased, not torn.
+        torn = 1 < k <= 10
+        expect(b, "$config wheel_diameter_mm",
+               "ok wheel_diameter_mm %s" % ("180.000" if done else "170.000"))
+        expect(b, "$config store", store_line(3 if done else 2, 1, torn))
+        assert b.ex("$diag").endswith(DIAG_END), "a config tail in $diag"
+        expect(b, "getActiveAlarm 16", "ok true 0 0")
+        if torn:
+            expect(b, "$config save", "ok saved 1 wheel_diameter_mm")
+            reboot(b)
+            expect(b, "$config store", store_line(3, 1))
+            expect(b, "$config wheel_diameter_mm", "ok wheel_diameter_mm 170.000")
+    finally:
+        b.close()
+
+
 def c_m0_boots(b):
     expect(b, "getState", 'ok true 25 "Unpowered"')
     ready(b)
@@ -943,6 +1073,7 @@ def main():
     m4 = os.path.join(build, "cortex-m4", "vehicle.elf")
     m0 = os.path.join(build, "cortex-m0", "vehicle.elf")
     omni = os.path.join(build, "cortex-m4-omni", "vehicle.elf")
+    cut = os.path.join(build, "cortex-m4", "vehicle-cut.elf")
     vehiclectl = os.path.join(build, "vehiclectl")
     passed = failed = 0
 
@@ -1006,6 +1137,10 @@ def main():
                         print("FAIL %s: unexpected bytes after it: %r" % (name, left))
             finally:
                 b.close()
+    with tempfile.TemporaryDirectory() as tmp:
+        run("config_save_reset", c_config_save_reset, m4, tmp)
+        for k in CUTS:
+            run("config_cut_%d" % k, c_config_cut, cut, tmp, k)
     print("mcu: %d passed, %d failed" % (passed, failed))
     return 1 if failed else 0
 

@@ -10,6 +10,7 @@ for f in qemu-system-arm arm-none-eabi-nm; do
 	command -v $f >/dev/null || { echo "mcu: $f missing (tools/deps.sh)"; echo "mcu: 0 passed, 1 failed"; exit 1; }
 done
 for f in "$build/cortex-m4/vehicle.elf" "$build/cortex-m4/bench.elf" "$build/cortex-m4/divcheck.elf" \
+	"$build/cortex-m4/vehicle-cut.elf" \
 	"$build/cortex-m4-omni/vehicle.elf" \
 	"$build/cortex-m0/vehicle.elf" \
 	"$build/vehiclectl"; do
