@@ -154,17 +154,64 @@ static inline bool within(vs_real_t x, vs_real_t lo, vs_real_t hi, bool lo_excl)
 	return (lo_excl ? x > lo : x >= lo) && x <= hi;
 }
 
-/* The first row with an element out of its range, or VS_CONFIG_NFIELDS.
- * The rows expand to comparisons with constants. */
+/* Each row's bounds in eighths of its unit (every bound of the table is a
+ * multiple of 1/8 below 2^28): one table of 8 bytes a row and one loop,
+ * where a comparison with two 64-bit constants per element took 1.8 KiB of
+ * a board's flash (run at init on a compiled-in configuration, a compiler
+ * folded it away; changed at run time, $config judges any). */
+static const struct {
+	int32_t lo8, hi8;
+} ranges[VS_CONFIG_NFIELDS] = {
+#define RANGE(m, n, t, d, lo, hi, ...) {(int32_t)((lo)*8), (int32_t)((hi)*8)},
+    VS_CONFIG_FIELDS(RANGE)
+#undef RANGE
+};
+/* The rows whose lower bound is excluded, a bit each. */
+_Static_assert(VS_CONFIG_NFIELDS <= 64, "a bit a row");
+#define EXCL(m, n, t, d, lo, hi, ex, ...) | ((uint64_t)(ex) << VS_CONFIG_ROW_##m)
+static const uint64_t lo_excl = 0 VS_CONFIG_FIELDS(EXCL);
+#undef EXCL
+
+/* A bound in row type's terms: a real row's as vs_real_t, an integer's as
+ * the integer. */
+static vs_real_t bound(int32_t b8, uint8_t type)
+{
+#ifdef VS_REAL_Q32
+	return type == VS_CFG_DOUBLE ? (vs_real_t)b8 * ((vs_real_t)1 << 29) : (vs_real_t)(b8 / 8);
+#else
+	(void)type;
+	return b8 / 8.0;
+#endif
+}
+
+/* Element k of row f as its range compares it. */
+static vs_real_t element(const vs_config_t *c, const vs_config_field_t *f, unsigned k)
+{
+	const void *p = (const char *)c + f->off;
+	switch (f->type) {
+	case VS_CFG_DOUBLE:
+		return ((const vs_real_t *)p)[k];
+	case VS_CFG_U32:
+		return (vs_real_t)((const uint32_t *)p)[k];
+	case VS_CFG_U16:
+		return (vs_real_t)((const uint16_t *)p)[k];
+	case VS_CFG_BOOL:
+		return (vs_real_t)((const bool *)p)[k];
+	default:
+		return (vs_real_t)((const vs_kinematics_t *)p)[k];
+	}
+}
+
+/* The first row with an element out of its range, or VS_CONFIG_NFIELDS. */
 static unsigned first_out_of_range(const vs_config_t *c)
 {
-#define IN_RANGE(m, n, t, d, lo, hi, ex, ...)                                                      \
-	for (unsigned k = 0; k < (n); k++)                                                         \
-		if (!within((vs_real_t)CELEM(c, m, t, k), VS_CFG_CONST_##t(lo),                    \
-			    VS_CFG_CONST_##t(hi), (ex)))                                           \
-			return VS_CONFIG_ROW_##m;
-	VS_CONFIG_FIELDS(IN_RANGE)
-#undef IN_RANGE
+	for (unsigned i = 0; i < VS_CONFIG_NFIELDS; i++) {
+		const vs_config_field_t *f = &vs_config_fields[i];
+		vs_real_t lo = bound(ranges[i].lo8, f->type), hi = bound(ranges[i].hi8, f->type);
+		for (unsigned k = 0; k < f->n; k++)
+			if (!within(element(c, f, k), lo, hi, (lo_excl >> i) & 1u))
+				return i;
+	}
 	return VS_CONFIG_NFIELDS;
 }
 

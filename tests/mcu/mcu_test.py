@@ -975,6 +975,21 @@ def c_config_save_reset(elf, tmp):
     changed."""
     b = fresh_board(elf, tmp)
     try:
+        # The ranges in Q32 (firmware/config.c's table): its ends taken,
+        # beyond them refused.
+        for line, reply in (
+                ("$config wheel_diameter_mm 9.999", "error 8 $config wheel_diameter_mm: "
+                 "wheel_diameter_mm: rejected by the configuration check"),
+                ("$config joystick_deadband 0.501", "error 8 $config joystick_deadband: "
+                 "joystick_deadband: rejected by the configuration check"),
+                ("$config joystick_deadband 0.5", "ok joystick_deadband 0.500"),
+                ("$config position_window_mm 0", "error 8 $config position_window_mm: "
+                 "position_window_mm: rejected by the configuration check"),
+                ("$config encoder_counts_per_rev 16777217", "error 8 $config "
+                 "encoder_counts_per_rev: encoder_counts_per_rev: rejected by the "
+                 "configuration check"),
+                ("$config joystick_deadband 0.05", "ok joystick_deadband 0.050")):
+            expect(b, line, reply)
         expect(b, "$config wheel_diameter_mm 160", "ok wheel_diameter_mm 160.000")
         expect(b, "$config tick_hz 500", "ok tick_hz 1000 pending 500")
         expect(b, "$config save", "ok saved 2 tick_hz wheel_diameter_mm")
