@@ -83,6 +83,8 @@ typedef struct {
 	stream_sub_t sub;
 	uint32_t q_put_total, q_sent_total; /* bytes into the queue, out to the port */
 	uint32_t stream_end;		    /* q_put_total after the last stream frame */
+	console_extra_fn next_extra;	    /* the console's extras after "$stream" */
+	void *next_xctx;
 } server_serial_t;
 
 struct vs_server {

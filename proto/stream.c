@@ -4,6 +4,7 @@
 #include <stddef.h>
 #include <string.h>
 
+#include "fmt.h"
 #include "wire.h"
 
 #define STREAM_FIELD(name, group, type, frame, off, unit, what)                                    \
@@ -46,23 +47,44 @@ size_t stream_frame_bytes(uint16_t mask)
 	return 7u + stream_payload_len(mask);
 }
 
-bool stream_fits(uint16_t mask, uint32_t period_ms, uint32_t baud)
+size_t stream_text_bytes(uint16_t mask)
 {
-	/* bytes / period <= baud / 10 * share, in integers */
-	uint64_t need = (uint64_t)stream_frame_bytes(mask) * 10000u * STREAM_SHARE_DEN;
+	/* "~stream SEQ TICK", then " name value" per field, then LF */
+	size_t n = sizeof("~stream 255 4294967295") - 1u + 1u;
+
+	for (unsigned i = 0; i < stream_field_count; i++)
+		if (mask & (1u << stream_fields[i].group))
+			n += 1u + strlen(stream_fields[i].name) + 1u + 11u;
+	return n;
+}
+
+/* The rule: bytes / period <= baud / 10 * share, in integers. */
+bool stream_fits_bytes(size_t bytes, uint32_t period_ms, uint32_t baud)
+{
+	uint64_t need = (uint64_t)bytes * 10000u * STREAM_SHARE_DEN;
 	uint64_t have = (uint64_t)period_ms * baud * STREAM_SHARE_NUM;
 
 	return need <= have;
 }
 
-uint32_t stream_min_period_ms(uint16_t mask, uint32_t baud)
+uint32_t stream_min_period_bytes(size_t bytes, uint32_t baud)
 {
-	uint64_t need = (uint64_t)stream_frame_bytes(mask) * 10000u * STREAM_SHARE_DEN;
+	uint64_t need = (uint64_t)bytes * 10000u * STREAM_SHARE_DEN;
 	uint64_t per = (uint64_t)baud * STREAM_SHARE_NUM;
 
-	if (!mask || !per)
+	if (!per)
 		return 0;
 	return (uint32_t)((need + per - 1u) / per);
+}
+
+bool stream_fits(uint16_t mask, uint32_t period_ms, uint32_t baud)
+{
+	return stream_fits_bytes(stream_frame_bytes(mask), period_ms, baud);
+}
+
+uint32_t stream_min_period_ms(uint16_t mask, uint32_t baud)
+{
+	return mask ? stream_min_period_bytes(stream_frame_bytes(mask), baud) : 0;
 }
 
 /* ---- reading the unit ---------------------------------------------------- */
@@ -303,6 +325,29 @@ int stream_decode(const uint8_t *p, size_t len, uint16_t *mask, uint32_t *tick, 
 	return 0;
 }
 
+size_t stream_text(const stream_sample_t *s, uint16_t mask, uint8_t seq, uint32_t tick, char *out,
+		   size_t cap)
+{
+	size_t n = fmt_print(out, cap, "~stream %u %lu", (unsigned)seq, (unsigned long)tick);
+
+	for (unsigned g = 0; g < STREAM_GROUPS; g++) {
+		if (!(mask & (1u << g)))
+			continue;
+		for (unsigned i = 0; i < stream_field_count && n < cap; i++) {
+			const stream_field_t *f = &stream_fields[i];
+
+			if (f->group == g)
+				n += fmt_print(out + n, cap - n, " %s %lld", f->name,
+					       (long long)stream_get(s, f));
+		}
+	}
+	if (n + 1u >= cap)
+		return 0;
+	out[n++] = '\n';
+	out[n] = '\0';
+	return n;
+}
+
 /* ---- CAN ------------------------------------------------------------------- */
 
 void stream_can_put(const stream_sample_t *s, unsigned which, uint8_t data[8])
@@ -338,11 +383,40 @@ void stream_sub_init(stream_sub_t *ss, uint32_t baud)
 	ss->baud = baud ? baud : STREAM_BAUD;
 }
 
+int stream_start(stream_sub_t *ss, uint32_t tick_hz, uint32_t now_tick, uint16_t mask,
+		 uint16_t period, bool text)
+{
+	uint32_t ticks = 0;
+
+	if (mask) {
+		/* A period of whole ticks, at least one. */
+		uint32_t t = (uint32_t)period * tick_hz;
+
+		ticks = t / 1000u;
+		if ((mask & ~STREAM_MASK_ALL) || !ticks || t % 1000u)
+			return WIRE_ST_VALUE;
+		if (!stream_fits_bytes(text ? stream_text_bytes(mask) : stream_frame_bytes(mask),
+				       period, ss->baud))
+			return WIRE_ST_RATE;
+	} else {
+		period = 0;
+		text = false;
+	}
+	ss->mask = mask;
+	ss->period_ms = period;
+	ss->period_ticks = ticks;
+	ss->text = text;
+	/* The first frame at the end of the next tick. */
+	ss->next_tick = now_tick + 1u;
+	ss->seq = 0;
+	ss->sent = ss->skipped = 0;
+	return WIRE_ST_OK;
+}
+
 size_t stream_subscribe(stream_sub_t *ss, uint32_t tick_hz, uint32_t now_tick, const uint8_t *p,
 			size_t len, uint8_t *resp, int *st)
 {
 	uint16_t mask, period;
-	uint32_t ticks = 0;
 
 	*st = WIRE_ST_OK;
 	if (len != STREAM_REQ_LEN) {
@@ -351,28 +425,10 @@ size_t stream_subscribe(stream_sub_t *ss, uint32_t tick_hz, uint32_t now_tick, c
 	}
 	mask = wire_get_u16(p);
 	period = wire_get_u16(p + 2);
-	if (mask) {
-		/* A period of whole ticks, at least one. */
-		uint32_t t = (uint32_t)period * tick_hz;
-
-		ticks = t / 1000u;
-		if ((mask & ~STREAM_MASK_ALL) || !ticks || t % 1000u) {
-			*st = WIRE_ST_VALUE;
-			return 0;
-		}
-		if (!stream_fits(mask, period, ss->baud)) {
-			*st = WIRE_ST_RATE;
-			return 0;
-		}
-	} else {
-		period = 0;
-	}
-	ss->mask = mask;
-	ss->period_ms = period;
-	ss->period_ticks = ticks;
-	/* The first frame at the end of the next tick. */
-	ss->next_tick = now_tick + 1u;
-	ss->seq = 0;
+	*st = stream_start(ss, tick_hz, now_tick, mask, period, false);
+	if (*st != WIRE_ST_OK)
+		return 0;
+	period = ss->period_ms;
 	wire_put_u16(resp, mask);
 	wire_put_u16(resp + 2, period);
 	wire_put_u16(resp + 4, (uint16_t)(mask ? stream_frame_bytes(mask) : 0));

@@ -73,6 +73,7 @@ extern const char *const stream_group_names[STREAM_GROUPS];
 #define STREAM_VALUES_MAX  39 /* every group */
 #define STREAM_PAYLOAD_MAX (STREAM_HDR + STREAM_VALUES_MAX)
 #define STREAM_FRAME_MAX   (7 + STREAM_PAYLOAD_MAX) /* FRAME_OVERHEAD + payload */
+#define STREAM_TEXT_MAX	   400			    /* a text line of every group, and more */
 /* The subscription: request u16 mask, u16 period_ms; answer (after the
  * status byte) u16 mask, u16 period_ms, u16 frame bytes, u16 the fastest
  * period the set may have, u16 tick rate (Hz). */
@@ -100,6 +101,12 @@ bool stream_fits(uint16_t mask, uint32_t period_ms, uint32_t baud);
 /* The shortest period (ms) at which mask fits (0 for mask 0). */
 uint32_t stream_min_period_ms(uint16_t mask, uint32_t baud);
 
+/* The same rule for any line size (the console's text form), and the
+ * most bytes one text line of mask takes (stream_text). */
+bool stream_fits_bytes(size_t bytes, uint32_t period_ms, uint32_t baud);
+uint32_t stream_min_period_bytes(size_t bytes, uint32_t baud);
+size_t stream_text_bytes(uint16_t mask);
+
 /* Reads the unit's values now (counter 0). */
 void stream_read(vehicle_t *v, stream_sample_t *s);
 /* A field's value, widened, and set from one. */
@@ -114,6 +121,12 @@ size_t stream_encode(const stream_sample_t *s, uint16_t mask, uint32_t tick, uin
  * are left as they were. */
 int stream_decode(const uint8_t *p, size_t len, uint16_t *mask, uint32_t *tick, stream_sample_t *s);
 
+/* The console's text form of a sample: "~stream SEQ TICK name value ..."
+ * (the groups of mask, the table's integers) and LF; its length, 0 when
+ * cap is too small. */
+size_t stream_text(const stream_sample_t *s, uint16_t mask, uint8_t seq, uint32_t tick, char *out,
+		   size_t cap);
+
 /* CAN status frame `which` (0..4: A..E), 8 data bytes; and back. */
 void stream_can_put(const stream_sample_t *s, unsigned which, uint8_t data[8]);
 void stream_can_get(const uint8_t data[8], unsigned which, stream_sample_t *s);
@@ -126,11 +139,18 @@ typedef struct {
 	uint32_t next_tick; /* the tick count at which the next frame is due */
 	uint8_t seq;	    /* the next frame's sequence number */
 	uint32_t baud;
+	bool text;	  /* the console's text form, not frames */
 	uint32_t sent;	  /* frames sent */
 	uint32_t skipped; /* slots that found the last frame still unsent */
 } stream_sub_t;
 
 void stream_sub_init(stream_sub_t *ss, uint32_t baud);
+/* Puts mask every period_ms in force (mask 0: none) at tick count
+ * now_tick, as frames or text lines: WIRE_ST_OK, or WIRE_ST_VALUE (unknown
+ * group, period 0 or not whole ticks) or WIRE_ST_RATE (over the line's
+ * share), the subscription in force then unchanged. */
+int stream_start(stream_sub_t *ss, uint32_t tick_hz, uint32_t now_tick, uint16_t mask,
+		 uint16_t period, bool text);
 /* A subscription request (payload p of len) at tick count now_tick on a
  * unit of tick_hz: fills resp (STREAM_RESP_LEN) and returns its length,
  * or 0 with *st the NAK: WIRE_ST_LENGTH, WIRE_ST_VALUE (unknown group,

@@ -411,6 +411,60 @@ static void test_console_client(void **state)
 	assert_int_equal(S.srv.serial.fs.st.executed, 0);
 }
 
+/* The client library's stream: subscribe, samples interleaved with
+ * requests (kept while the client waits for answers), consecutive sequence
+ * numbers 10 ticks apart, the refusal of a rate the line cannot carry
+ * (NAK rate) and none on the console transport; unsubscribe. */
+static void test_client_stream(void **state)
+{
+	vc_stream_info_t info;
+	vc_sample_t smp;
+	uint32_t tick0 = 0;
+	int16_t st = 0;
+	char msg[VS_STATE_MSG_MAX];
+	bool r = false;
+
+	(void)state;
+	host_drain();
+	assert_int_equal(vc_attach_serial_fd(&C, SLAVE, false), VC_OK);
+	C.timeout_ms = 5000;
+	assert_int_equal(vc_stream_subscribe(&C, STREAM_MASK_ALL, 1, &info), VC_E_NAK);
+	assert_int_equal(C.nak, WIRE_ST_RATE);
+	assert_int_equal(vc_stream_subscribe(&C, 0x09, 10, &info), VC_OK);
+	assert_int_equal(info.mask, 0x09);
+	assert_int_equal(info.period_ms, 10);
+	assert_int_equal(info.frame_bytes, 28);
+	assert_int_equal(info.min_period_ms, 4);
+	assert_int_equal(info.tick_hz, 1000);
+	for (unsigned k = 0; k < 50; k++) {
+		if (k % 5 == 2) {
+			/* a request between samples: its answer comes, the
+			 * samples that arrive meanwhile are kept */
+			assert_int_equal(vc_getState(&C, &r, &st, msg), VC_OK);
+			assert_int_equal(st, 25);
+		}
+		assert_int_equal(vc_stream_next(&C, &smp, 5000), VC_OK);
+		assert_int_equal(smp.seq, (uint8_t)k);
+		assert_int_equal(smp.lost, 0);
+		assert_int_equal(smp.mask, 0x09);
+		assert_int_equal(smp.v.state, 25);
+		if (k == 0)
+			tick0 = smp.tick;
+		assert_int_equal(smp.tick - tick0, 10 * k);
+	}
+	assert_int_equal(vc_stream_unsubscribe(&C), VC_OK);
+	assert_int_equal(SER.sub.mask, 0);
+	/* what was sent before the unsubscription arrived, then nothing */
+	while (vc_stream_next(&C, &smp, 100) == VC_OK)
+		;
+	assert_int_equal(vc_stream_next(&C, &smp, 100), VC_E_TIMEOUT);
+	vc_close(&C);
+	assert_int_equal(vc_attach_console_fd(&C, SLAVE, false), VC_OK);
+	assert_int_equal(vc_stream_subscribe(&C, 0x09, 10, &info), VC_E_UNSUPPORTED);
+	assert_int_equal(vc_stream_next(&C, &smp, 10), VC_E_UNSUPPORTED);
+	vc_close(&C);
+}
+
 /* vc_wait_done after a refused request left a warning: the unit reads
  * Warning-111 while idle, which is done (spec 6.9); a move's wait returns
  * when the move has ended, a fault's with VC_E_STOPPED, a wait too short
@@ -1390,17 +1444,28 @@ static void test_vehiclectl(void **state)
 	f = fopen(row, "r");
 	assert_non_null(f);
 	assert_non_null(fgets(row, sizeof(row), f));
-	assert_string_equal(row, "t_s,state,msg,x_mm,y_mm,theta_deg,speed_mm_s,speed_deg_s,"
-				 "battery_0_1V,alarms,newest_alarm\n");
+	/* over frames, the unit's telemetry stream: a row per 100 ms of the
+	 * unit's own time, 0 to 0.3 s, whatever the host's load */
+	assert_string_equal(row, "t_s,tick,seq,lost,x_mm,y_mm,theta_deg,cmd_vx_mm_s,cmd_vy_mm_s,"
+				 "cmd_w_deg_s,meas_vx_mm_s,meas_vy_mm_s,meas_w_deg_s,state,alarms,"
+				 "newest_alarm,alarm_type,battery_0_1V,queue_len,inputs,outputs\n");
 	lines = 0;
-	while (fgets(row, sizeof(row), f))
+	while (fgets(row, sizeof(row), f)) {
+		unsigned long tick, seq, lost;
+		double t;
+
+		assert_int_equal(sscanf(row, "%lf,%lu,%lu,%lu,", &t, &tick, &seq, &lost), 4);
+		assert_true(fabs(t - 0.1 * lines) < 1e-9);
+		assert_int_equal(seq, lines);
+		assert_int_equal(lost, 0);
 		lines++;
+	}
 	fclose(f);
 	snprintf(row, sizeof(row), "/tmp/vehiclectl_test_%d.csv", (int)getpid());
 	unlink(row);
-	/* a row per 100 ms for 0.3 s: at most 4 and the closing one; a loaded
-	 * host may delay the rows, never add any */
-	assert_true(lines >= 1 && lines <= 5);
+	assert_int_equal(lines, 4);
+	/* the unit is left without a subscription */
+	sim_line("$stream\n", "ok stream mask 0x00 period 0 sent 0 skipped 0\n");
 	/* the turn finished: the pose reads back (polling, as a host does, keeps
 	 * the link watchdog fed; bounded at 20 s) */
 	for (int i = 0; i < 100; i++) {
@@ -1698,6 +1763,7 @@ int main(int argc, char **argv)
 	    cmocka_unit_test_setup_teardown(test_console_raw, setup, teardown),
 	    cmocka_unit_test_setup_teardown(test_console_utf8, setup, teardown),
 	    cmocka_unit_test_setup_teardown(test_binary_client, setup, teardown),
+	    cmocka_unit_test_setup_teardown(test_client_stream, setup, teardown),
 	    cmocka_unit_test_setup_teardown(test_console_client, setup, teardown),
 	    cmocka_unit_test_setup_teardown(test_wait_done_frames, setup, teardown),
 	    cmocka_unit_test_setup_teardown(test_wait_done_console, setup, teardown),

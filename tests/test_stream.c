@@ -472,6 +472,57 @@ static void test_refuse_and_unsubscribe(void **state)
 	assert_int_equal(U.srv.serial.fs.st.duplicates, 1);
 }
 
+static void host_line(const char *line)
+{
+	size_t n = strlen(line);
+
+	memcpy(P.in + P.in_len, line, n);
+	P.in_len += n;
+}
+
+/* The console's text form: "$stream pose,state 100" on the port (read
+ * after tick 1), a line "~stream SEQ TICK name value ..." at the end of
+ * tick 2 and every 100 ticks after, between whole replies;
+ * "$stream" reads it, "$stream off" ends it; a rate the line cannot carry
+ * (as text: 119 bytes a line, 14 ms at the fastest) is refused. */
+static void test_text_form(void **state)
+{
+	static const char want[] =
+	    "error 8 $stream: the line carries these every 14 ms at the fastest\n"
+	    "error 8 $stream GROUPS PERIOD_MS: groups all, a mask or "
+	    "pose,cmd,meas,state,alarm,battery,io,queue\n"
+	    "error 8 $stream GROUPS PERIOD_MS: groups all, a mask or "
+	    "pose,cmd,meas,state,alarm,battery,io,queue\n"
+	    "ok stream mask 0x09 period 100 text\n"
+	    "~stream 0 2 x_dmm 0 y_dmm 0 theta_mdeg 0 state 25 alarms 0\n"
+	    "ok true 25 \"Unpowered\"\n"
+	    "ok stream mask 0x09 period 100 sent 1 skipped 0 text\n"
+	    "~stream 1 102 x_dmm 0 y_dmm 0 theta_mdeg 0 state 25 alarms 0\n"
+	    "~stream 2 202 x_dmm 0 y_dmm 0 theta_mdeg 0 state 25 alarms 0\n"
+	    "ok stream off\n"
+	    "ok stream mask 0x00 period 0 sent 0 skipped 0\n";
+	stream_sample_t s;
+
+	(void)state;
+	assert_int_equal(stream_text_bytes(0x09), 119);
+	assert_true(stream_text_bytes(STREAM_MASK_ALL) < STREAM_TEXT_MAX);
+	host_line("$stream pose,state 13\n$stream pose,nothing 100\n$stream 0x1FF 100\n");
+	host_line("$stream pose,state 100\n");
+	tick();
+	for (int i = 0; i < 99; i++)
+		tick();
+	stream_read(&U.vehicle, &s);
+	host_line("getState\n$stream\n");
+	for (int i = 0; i < 110; i++)
+		tick();
+	host_line("$stream off\n$stream\n");
+	for (int i = 0; i < 300; i++)
+		tick();
+	P.out[P.out_len] = '\0';
+	assert_string_equal((char *)P.out, want);
+	assert_int_equal(s.state, 25);
+}
+
 /* The stream keeps nothing alive: a moving unit whose host only listens
  * stops at the link watchdog's timeout (warning 153) as if there were no
  * stream; the stream shows it. */
@@ -648,6 +699,7 @@ int main(void)
 	    cmocka_unit_test_setup(test_interleave_under_load, setup),
 	    cmocka_unit_test_setup(test_line_behind_skips, setup),
 	    cmocka_unit_test_setup(test_refuse_and_unsubscribe, setup),
+	    cmocka_unit_test_setup(test_text_form, setup),
 	    cmocka_unit_test(test_watchdog_not_fed),
 	    cmocka_unit_test(test_can_layout_from_table),
 	    cmocka_unit_test(test_docs_match_table),

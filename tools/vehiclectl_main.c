@@ -59,9 +59,10 @@ static void usage(FILE *f)
 	    "                  (exit 0); a fault, Locked, Stuck, servo or power off (exit 1);\n"
 	    "                  still busy or paused after --wait-limit (exit 4)\n"
 	    "  watch [--count N] [--interval MS]\n"
-	    "                  state, pose, speed, battery and alarms until Ctrl-C\n"
+	    "                  state, pose, speed, battery and alarms until Ctrl-C (over\n"
+	    "                  frames: the unit's telemetry stream, every value each MS)\n"
 	    "  record FILE --duration S [--interval MS]\n"
-	    "                  the same as CSV rows into FILE\n"
+	    "                  the same as CSV rows into FILE (docs/trace.md)\n"
 	    "  config [NAME [VALUE...] | NAME[K] VALUE | diff | save | defaults | reload | store]\n"
 	    "                  the unit's $config (docs/console.md): prints its reply; exit 0\n"
 	    "                  on ok, 1 when the unit refused (error ...)\n",
@@ -439,6 +440,106 @@ static int sample_loop(vc_client_t *c, FILE *csv, bool json, long count, double 
 	return 0;
 }
 
+/* ---- watch and record over the telemetry stream (serial frames) ---- */
+
+static unsigned long line_baud = VC_DEFAULT_BAUD;
+
+static void stream_csv_row(FILE *f, double t, const vc_sample_t *s)
+{
+	const stream_sample_t *v = &s->v;
+
+	fprintf(f,
+		"%.3f,%lu,%u,%lu,%.1f,%.1f,%.3f,%d,%d,%.1f,%d,%d,%.1f,%u,%u,%lu,%u,%.1f,%u,%u,%u\n",
+		t, (unsigned long)s->tick, s->seq, (unsigned long)s->lost, v->x_dmm / 10.0,
+		v->y_dmm / 10.0, v->theta_mdeg / 1000.0, v->vx_mm_s, v->vy_mm_s, v->w_ddeg_s / 10.0,
+		v->mvx_mm_s, v->mvy_mm_s, v->mw_ddeg_s / 10.0, v->state, v->alarms,
+		(unsigned long)v->alarm_code, v->alarm_type, v->battery_cV / 10.0, v->queue,
+		v->inputs, v->outputs);
+}
+
+static void stream_print(double t, const vc_sample_t *s, bool json)
+{
+	const stream_sample_t *v = &s->v;
+
+	if (json) {
+		printf("{\"t\":%.3f,\"tick\":%lu,\"seq\":%u,\"lost\":%lu,\"state\":%u,"
+		       "\"x\":%.1f,\"y\":%.1f,\"theta\":%.3f,\"vx\":%d,\"vy\":%d,\"w\":%.1f,"
+		       "\"mvx\":%d,\"mvy\":%d,\"mw\":%.1f,\"battery\":%.1f,\"alarms\":%u,"
+		       "\"newest\":%lu,\"queue\":%u,\"inputs\":%u,\"outputs\":%u}\n",
+		       t, (unsigned long)s->tick, s->seq, (unsigned long)s->lost, v->state,
+		       v->x_dmm / 10.0, v->y_dmm / 10.0, v->theta_mdeg / 1000.0, v->vx_mm_s,
+		       v->vy_mm_s, v->w_ddeg_s / 10.0, v->mvx_mm_s, v->mvy_mm_s,
+		       v->mw_ddeg_s / 10.0, v->battery_cV / 10.0, v->alarms,
+		       (unsigned long)v->alarm_code, v->queue, v->inputs, v->outputs);
+		return;
+	}
+	printf("%8.3f s  state %2u  x %9.1f y %9.1f th %8.3f  v %5d mm/s %7.1f deg/s  "
+	       "meas %5d %7.1f  bat %5.2f  queue %u  alarms %u",
+	       t, v->state, v->x_dmm / 10.0, v->y_dmm / 10.0, v->theta_mdeg / 1000.0, v->vx_mm_s,
+	       v->w_ddeg_s / 10.0, v->mvx_mm_s, v->mw_ddeg_s / 10.0, v->battery_cV / 100.0,
+	       v->queue, v->alarms);
+	if (v->alarm_code)
+		printf(" newest %lu", (unsigned long)v->alarm_code);
+	if (s->lost)
+		printf("  (%lu lost)", (unsigned long)s->lost);
+	printf("\n");
+}
+
+/* Every group every interval_ms, as the unit sends it: time is the unit's
+ * (its tick count), not the host's. Passive: the stream keeps no motion
+ * alive (docs/protocol.md). Unsubscribes at the end. */
+static int stream_loop(vc_client_t *c, FILE *csv, bool json, long count, double duration,
+		       unsigned interval_ms)
+{
+	vc_stream_info_t info;
+	vc_sample_t s;
+	uint32_t tick0 = 0;
+	long k = 0;
+	int e = vc_stream_subscribe(c, STREAM_MASK_ALL, interval_ms, &info);
+
+	if (e == VC_E_NAK && c->nak == WIRE_ST_RATE) {
+		fprintf(stderr,
+			"vehiclectl: the line (%lu baud) cannot carry every value every %u ms; "
+			"--interval %lu or more\n",
+			line_baud, interval_ms,
+			(unsigned long)stream_min_period_ms(STREAM_MASK_ALL, (uint32_t)line_baud));
+		return 2;
+	}
+	if (e != VC_OK)
+		return report_err(c, e);
+	if (csv)
+		fprintf(csv, "t_s,tick,seq,lost,x_mm,y_mm,theta_deg,cmd_vx_mm_s,cmd_vy_mm_s,"
+			     "cmd_w_deg_s,meas_vx_mm_s,meas_vy_mm_s,meas_w_deg_s,state,alarms,"
+			     "newest_alarm,alarm_type,battery_0_1V,queue_len,inputs,outputs\n");
+	while (!stop_requested && (count < 0 || k < count)) {
+		double t;
+
+		e = vc_stream_next(c, &s, interval_ms + 1000u);
+		if (e != VC_OK) {
+			if (stop_requested)
+				break;
+			fprintf(stderr, "vehiclectl: stream: %s\n", vc_strerror(e));
+			vc_stream_unsubscribe(c);
+			return 1;
+		}
+		if (k == 0)
+			tick0 = s.tick;
+		t = (double)(s.tick - tick0) / (info.tick_hz ? info.tick_hz : 1000);
+		if (duration >= 0 && t > duration + 1e-9)
+			break;
+		if (csv) {
+			stream_csv_row(csv, t, &s);
+			fflush(csv);
+		} else {
+			stream_print(t, &s, json);
+		}
+		fflush(stdout);
+		k++;
+	}
+	e = vc_stream_unsubscribe(c);
+	return e == VC_OK ? 0 : report_err(c, e);
+}
+
 static bool parse_ulong(const char *s, unsigned long max, unsigned long *out)
 {
 	char *end;
@@ -488,7 +589,10 @@ static int loop_cmd(vc_client_t *c, int argc, char **argv, bool json, bool recor
 			return 3;
 		}
 	}
-	rc = sample_loop(c, csv, json, count, duration, (unsigned)interval);
+	if (c->t.stream_next)
+		rc = stream_loop(c, csv, json, count, duration, (unsigned)interval);
+	else
+		rc = sample_loop(c, csv, json, count, duration, (unsigned)interval);
 	if (csv && fclose(csv) != 0) {
 		fprintf(stderr, "vehiclectl: %s: write failed\n", file);
 		rc = 3;
@@ -631,6 +735,7 @@ int main(int argc, char **argv)
 	}
 	c->timeout_ms = (unsigned)timeout;
 	c->retries = (unsigned)retries;
+	line_baud = baud;
 
 	{
 		struct sigaction sa;

@@ -125,6 +125,61 @@ int vc_console_line(vc_client_t *c, const char *line, char *reply, size_t cap)
 	return VC_OK;
 }
 
+int vc_stream_subscribe(vc_client_t *c, uint16_t mask, unsigned period_ms, vc_stream_info_t *info)
+{
+	uint8_t req[STREAM_REQ_LEN];
+	size_t n = 0;
+	int e;
+
+	if (!c->t.stream_next)
+		return VC_E_UNSUPPORTED;
+	if (period_ms > UINT16_MAX)
+		return VC_E_ARG;
+	wire_put_u16(req, mask);
+	wire_put_u16(req + 2, (uint16_t)period_ms);
+	e = exchange(c, WIRE_OP_STREAM, req, sizeof(req), &n);
+	if (e != VC_OK)
+		return e;
+	if (n != STREAM_RESP_LEN)
+		return VC_E_PROTO;
+	c->stream_seen = false;
+	if (info) {
+		info->mask = wire_get_u16(c->resp);
+		info->period_ms = wire_get_u16(c->resp + 2);
+		info->frame_bytes = wire_get_u16(c->resp + 4);
+		info->min_period_ms = wire_get_u16(c->resp + 6);
+		info->tick_hz = wire_get_u16(c->resp + 8);
+	}
+	return VC_OK;
+}
+
+int vc_stream_unsubscribe(vc_client_t *c)
+{
+	return vc_stream_subscribe(c, 0, 0, NULL);
+}
+
+int vc_stream_next(vc_client_t *c, vc_sample_t *s, unsigned timeout_ms)
+{
+	uint8_t p[STREAM_PAYLOAD_MAX];
+	size_t len = 0;
+	uint8_t seq = 0;
+	int e;
+
+	if (!c->t.stream_next)
+		return VC_E_UNSUPPORTED;
+	e = c->t.stream_next(c->t.ctx, p, sizeof(p), &len, &seq, timeout_ms);
+	if (e != VC_OK)
+		return e;
+	memset(s, 0, sizeof(*s));
+	if (stream_decode(p, len, &s->mask, &s->tick, &s->v) != 0)
+		return VC_E_PROTO;
+	s->seq = seq;
+	s->lost = c->stream_seen ? (uint8_t)(seq - c->stream_seq - 1u) : 0u;
+	c->stream_seen = true;
+	c->stream_seq = seq;
+	return VC_OK;
+}
+
 /* One operation by opcode; out[] is filled only on success. */
 static int run(vc_client_t *c, unsigned op, bool *ret, const cmd_value_t *in, cmd_value_t *out)
 {

@@ -30,6 +30,7 @@
 
 #include "../../hal/link.h"
 #include "../cmdtab.h"
+#include "../stream.h"
 #include "../wire.h"
 
 /* Client status codes. */
@@ -65,6 +66,12 @@ typedef struct {
 			unsigned retries);
 	/* Releases the transport (closes the fd it owns). May be NULL. */
 	void (*close)(void *ctx);
+	/* The next stream frame the unit sent (kept while waiting for
+	 * answers, or read now): its payload into p (cap bytes), *len and
+	 * *seq; VC_E_TIMEOUT when none came within timeout_ms. NULL: the link
+	 * has no stream (console, CAN). */
+	int (*stream_next)(void *ctx, uint8_t *p, size_t cap, size_t *len, uint8_t *seq,
+			   unsigned timeout_ms);
 	void *ctx;
 	const char *name; /* "serial", "console", "can" */
 } vc_transport_t;
@@ -82,6 +89,8 @@ typedef struct {
 	vc_stats_t stats;     /* kept by the transports */
 	char remote_msg[160]; /* console link: text of the last "error" reply */
 	wire_store_t store;   /* strings and alarms of the last answer */
+	bool stream_seen;     /* a stream frame was read since the subscription */
+	uint8_t stream_seq;   /* ... and its sequence number */
 	uint8_t resp[WIRE_RESP_MAX];
 } vc_client_t;
 
@@ -116,6 +125,30 @@ int vc_info(vc_client_t *c, unsigned *proto_version, uint16_t *table_crc, unsign
  * whatever the reply says ("ok ..." or "error ..."); VC_E_ARG for a line
  * over 64 bytes or with a line ending. */
 int vc_console_line(vc_client_t *c, const char *line, char *reply, size_t cap);
+
+/* The telemetry stream (docs/protocol.md, "Telemetry stream"; serial
+ * frames only: VC_E_UNSUPPORTED on the console and CAN). Subscribe to the
+ * groups of mask (bit STREAM_G_*) every period_ms; info (may be NULL) gets
+ * what the unit put in force. A set the line cannot carry: VC_E_NAK with
+ * c->nak WIRE_ST_RATE (info is not written). */
+typedef struct {
+	uint16_t mask, period_ms, frame_bytes, min_period_ms, tick_hz;
+} vc_stream_info_t;
+int vc_stream_subscribe(vc_client_t *c, uint16_t mask, unsigned period_ms, vc_stream_info_t *info);
+int vc_stream_unsubscribe(vc_client_t *c);
+/* One sample of the stream: its sequence number, groups, the unit's tick,
+ * how many frames were lost before it (a gap in the sequence numbers), and
+ * the values (those of groups not in mask read 0). */
+typedef struct {
+	uint8_t seq;
+	uint16_t mask;
+	uint32_t tick;
+	uint32_t lost;
+	stream_sample_t v;
+} vc_sample_t;
+/* The next sample, waiting up to timeout_ms (VC_E_TIMEOUT); VC_E_PROTO for
+ * a frame that does not decode. */
+int vc_stream_next(vc_client_t *c, vc_sample_t *s, unsigned timeout_ms);
 
 /* The operations, in spec order. */
 int vc_clearAlarm(vc_client_t *c, bool *ret);

@@ -375,7 +375,7 @@ static void con_close(void *ctx)
 int vc_attach_console_fd(vc_client_t *c, int fd, bool own)
 {
 	con_t *s = calloc(1, sizeof(*s));
-	vc_transport_t t;
+	vc_transport_t t = {0};
 
 	if (!s) {
 		errno = ENOMEM;

@@ -79,6 +79,14 @@ int vcio_read_some(int fd, uint8_t *buf, size_t cap, uint64_t deadline, size_t *
 	}
 }
 
+/* Stream frames kept while the host waits for answers (the oldest goes
+ * when full). */
+#define STREAM_KEEP 64
+typedef struct {
+	uint8_t seq, len;
+	uint8_t p[STREAM_PAYLOAD_MAX];
+} kept_t;
+
 typedef struct {
 	int fd;
 	bool own;
@@ -94,12 +102,36 @@ typedef struct {
 	int status;
 	uint8_t *resp;
 	size_t cap, len;
+	kept_t kept[STREAM_KEEP];
+	unsigned kept_at, kept_n;
 } serial_t;
+
+/* A frame the unit sent on its own (op without the answer flag). */
+static void keep_stream(serial_t *s, const frame_t *f)
+{
+	kept_t *k;
+
+	if (f->op != WIRE_OP_STREAM || f->len > STREAM_PAYLOAD_MAX)
+		return;
+	if (s->kept_n == STREAM_KEEP) {
+		s->kept_at = (s->kept_at + 1u) % STREAM_KEEP;
+		s->kept_n--;
+	}
+	k = &s->kept[(s->kept_at + s->kept_n) % STREAM_KEEP];
+	k->seq = f->seq;
+	k->len = (uint8_t)f->len;
+	memcpy(k->p, f->payload, f->len);
+	s->kept_n++;
+}
 
 static void on_frame(void *ctx, const frame_t *f)
 {
 	serial_t *s = ctx;
 
+	if (f->status == WIRE_ST_OK && !(f->op & FRAME_RESP_FLAG)) {
+		keep_stream(s, f);
+		return;
+	}
 	if (s->done)
 		return;
 	if (f->status != WIRE_ST_OK) {
@@ -227,6 +259,38 @@ static int serial_exchange(void *ctx, unsigned opcode, const uint8_t *req, size_
 			     retries);
 }
 
+static int serial_stream_next(void *ctx, uint8_t *p, size_t cap, size_t *len, uint8_t *seq,
+			      unsigned timeout_ms)
+{
+	serial_t *s = ctx;
+	uint64_t deadline = vcio_now_ms() + timeout_ms;
+
+	s->done = true; /* no answer is awaited: answers read now are dropped */
+	while (!s->kept_n) {
+		uint8_t buf[512];
+		size_t got = 0;
+		int e = vcio_read_some(s->fd, buf, sizeof(buf), deadline, &got);
+
+		if (e != VC_OK)
+			return e;
+		if (s->stats)
+			s->stats->bytes_rx += (uint32_t)got;
+		frame_rx_feed(&s->rx, buf, got, (uint32_t)vcio_now_ms());
+	}
+	{
+		kept_t *k = &s->kept[s->kept_at];
+
+		s->kept_at = (s->kept_at + 1u) % STREAM_KEEP;
+		s->kept_n--;
+		if (k->len > cap)
+			return VC_E_PROTO;
+		memcpy(p, k->p, k->len);
+		*len = k->len;
+		*seq = k->seq;
+	}
+	return VC_OK;
+}
+
 static void serial_close(void *ctx)
 {
 	serial_t *s = ctx;
@@ -239,7 +303,7 @@ static void serial_close(void *ctx)
 int vc_attach_serial_fd(vc_client_t *c, int fd, bool own)
 {
 	serial_t *s = calloc(1, sizeof(*s));
-	vc_transport_t t;
+	vc_transport_t t = {0};
 
 	if (!s) {
 		errno = ENOMEM;
@@ -253,6 +317,7 @@ int vc_attach_serial_fd(vc_client_t *c, int fd, bool own)
 	frame_rx_init(&s->rx, s->rxbuf, FRAME_RESP_PAYLOAD_MAX, on_frame, NULL, s);
 	t.exchange = serial_exchange;
 	t.close = serial_close;
+	t.stream_next = serial_stream_next;
 	t.ctx = s;
 	t.name = "serial";
 	vc_init(c, &t);
