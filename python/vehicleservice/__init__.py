@@ -15,3 +15,4 @@ from .client import (DONE_STATES, STOPPED_STATES, ActiveAlarms, Acceleration, Al
 from .errors import (ConsoleError, LinkTimeout, MotionStopped, NakError, ProtocolError,  # noqa: F401
                      VehicleError, WaitTimeout)
 from .ops import OPERATIONS, AlarmType, table_crc  # noqa: F401
+from .stream import GROUPS, Sample, StreamInfo, Subscription  # noqa: F401

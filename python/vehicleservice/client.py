@@ -9,12 +9,14 @@ LinkTimeout when nothing came back; wait_done's MotionStopped and
 WaitTimeout.
 """
 import math
+import struct
 import time
 from typing import Generic, List, NamedTuple, TypeVar
 
 from .errors import ConsoleError, MotionStopped, ProtocolError, WaitTimeout
 from .ops import (ALARM_TYPES, OP_CONSOLE, OPERATIONS, PROTOCOL_VERSION, AlarmType, decode_info,
                   decode_outs, encode_args, table_crc)
+from .stream import OP_STREAM, StreamInfo, Subscription, mask_of
 from .transport import CanTransport, ConsoleTransport, FrameTransport
 
 T = TypeVar("T")
@@ -214,6 +216,25 @@ class Vehicle:
         ``"store"``; the reply after "ok " (docs/console.md), ConsoleError
         for a refusal."""
         return self.console_line(" ".join(["$config"] + [str(a) for a in args]))
+
+    def subscribe(self, groups="all", period_ms: int = 100, timeout: float = 2.0) -> Subscription:
+        """The telemetry stream (docs/protocol.md, "Telemetry stream"):
+        the groups ("pose", "cmd", "meas", "state", "alarm", "battery",
+        "io", "queue", "all", or a mask) every period_ms, as an iterator of
+        typed Samples whose next() waits up to timeout s; close() (or the
+        with block's end) unsubscribes. A rate the line cannot carry:
+        NakError with name "rate". Binary frames only."""
+        if not isinstance(self.transport, FrameTransport):
+            raise NotImplementedError("the stream is on binary frames only")
+        mask = mask_of(groups)
+        r = self.transport.exchange(OP_STREAM, struct.pack("<HH", mask, period_ms))
+        if len(r) != 10:
+            raise ProtocolError("subscription answer of %d bytes" % len(r))
+        return Subscription(self, StreamInfo(*struct.unpack("<5H", r)), timeout)
+
+    def unsubscribe(self) -> None:
+        """Ends the stream (mask 0)."""
+        self.transport.exchange(OP_STREAM, struct.pack("<HH", 0, 0))
 
     def _ok(self, name, *args) -> bool:
         return self.call(name, *args)[0]

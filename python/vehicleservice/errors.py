@@ -15,7 +15,8 @@ class ConsoleError(VehicleError):
         self.message = message
 
 
-NAK_NAMES = {1: "crc", 2: "oversize", 3: "length", 4: "opcode", 5: "value", 6: "truncated"}
+NAK_NAMES = {1: "crc", 2: "oversize", 3: "length", 4: "opcode", 5: "value", 6: "truncated",
+             8: "rate"}
 
 
 class NakError(VehicleError):

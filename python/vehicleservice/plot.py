@@ -66,7 +66,8 @@ def read_config(path):
 
 def read_trace(path):
     """Columns as lists of floats (text columns dropped), and the kind:
-    'sim' (vehicle-sim --trace) or 'record' (vehiclectl record)."""
+    'sim' (vehicle-sim --trace), 'stream' (vehiclectl record over frames:
+    the unit's telemetry stream) or 'record' (vehiclectl record polling)."""
     with open(path, newline="") as f:
         rows = list(csv.reader(f))
     if not rows:
@@ -83,6 +84,8 @@ def read_trace(path):
             del cols[name]
     if "cmd_x_mm" in cols:
         kind = "sim"
+    elif "tick" in cols and "meas_vx_mm_s" in cols and "x_mm" in cols:
+        kind = "stream"
     elif "x_mm" in cols and "t_s" in cols:
         kind = "record"
     else:
@@ -176,6 +179,19 @@ def analyse(cols, kind, cfg):
         q = cols["queue_len"]
         marks = [0] + [i for i in range(1, len(t)) if q[i] < q[i - 1] or
                        (vt[i] == 0 and vr[i] == 0 and (vt[i - 1] != 0 or vr[i - 1] != 0))]
+    elif kind == "stream":
+        # the unit's own samples: commanded and measured body velocity
+        t = cols["t_s"]
+        th_cmd, err, err_th, path_cmd, wheels = None, None, None, None, None
+        vt = [math.hypot(a, b) for a, b in zip(cols["cmd_vx_mm_s"], cols["cmd_vy_mm_s"])]
+        vr = cols["cmd_w_deg_s"]
+        x, y = cols["x_mm"], cols["y_mm"]
+        th_meas = unwrap(cols["theta_deg"])
+        vt_meas = [math.hypot(a, b) for a, b in zip(cols["meas_vx_mm_s"], cols["meas_vy_mm_s"])]
+        vr_meas = cols["meas_w_deg_s"]
+        k = window(t, WINDOW_S)
+        q = cols["queue_len"]
+        marks = [0] + [i for i in range(1, len(t)) if q[i] < q[i - 1]]
     else:
         t = cols["t_s"]
         vt, vr, th_cmd, err, err_th, path_cmd, wheels = None, None, None, None, None, None, None

@@ -6,6 +6,7 @@ after the status byte, or raises NakError / LinkTimeout; the console
 transport's command(line) returns the words after "ok" or raises
 ConsoleError.
 """
+import collections
 import os
 import struct
 import time
@@ -15,6 +16,8 @@ from .ops import OP_INFO, crc16
 
 SYNC = 0xA5
 NAK_CRC, NAK_TRUNCATED = 1, 6
+OP_STREAM = 0x7D
+STREAM_KEEP = 256  # stream frames kept while waiting for answers
 
 
 def _open_serial(port, baudrate):
@@ -37,11 +40,32 @@ class FrameTransport:
         self.retries = retries
         self.seq = (os.getpid() ^ time.monotonic_ns()) & 0xFF if seq is None else seq & 0xFF
         self._buf = bytearray()
+        self._stream = collections.deque(maxlen=STREAM_KEEP)
         self.info = self.exchange(OP_INFO, b"")
 
     def close(self):
         if self.own:
             self.ser.close()
+
+    def next_stream(self, timeout):
+        """(seq, payload) of the next stream frame the unit sent (kept
+        while waiting for answers, or read now); LinkTimeout after
+        timeout seconds without one."""
+        deadline = time.monotonic() + timeout
+        while not self._stream:
+            got = self._read_frame(deadline)
+            if got is None:
+                raise LinkTimeout("no stream frame within %.3f s" % timeout)
+            self._keep(got)
+        return self._stream.popleft()
+
+    def _keep(self, got):
+        """Keeps a frame the unit sent on its own; True when it was one."""
+        seq, op, data = got
+        if op != OP_STREAM:
+            return False
+        self._stream.append((seq, data))
+        return True
 
     @staticmethod
     def encode(seq, op, payload):
@@ -89,6 +113,8 @@ class FrameTransport:
                 got = self._read_frame(deadline)
                 if got is None:
                     break  # timeout: the same frame again
+                if self._keep(got):
+                    continue  # a stream frame, not an answer
                 seq, op, data = got
                 if seq != self.seq or not data:
                     continue  # an answer to an earlier request
