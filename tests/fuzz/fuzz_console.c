@@ -8,6 +8,8 @@
  * untouched (a refusal only raises a warning), unless the operation failed
  * and raised a fault (setPower's relay, setServo's drives): a fault halts
  * motion whatever raised it. '$wait' is capped so one input stays fast.
+ * The console is the serial server's (server_serve_serial), so its extras
+ * ($link, $stream with the text form's groups and period) are reached too.
  */
 #include <stdint.h>
 #include <stdio.h>
@@ -19,6 +21,9 @@
 #define WAIT_CAP_MS 20
 
 static sim_t S;
+static server_serial_t SER;
+static console_extra_fn next_extra; /* the server's chain: $stream, $link, the simulator's */
+static void *next_xctx;
 static struct {
 	unsigned replies;
 	char last[CONSOLE_REPLY_MAX + 2];
@@ -54,7 +59,20 @@ static bool extra(void *ctx, int argc, char **argv, char *reply, size_t cap)
 			return true;
 		}
 	}
-	return sim_extra(ctx, argc, argv, reply, cap);
+	(void)ctx;
+	return next_extra(next_xctx, argc, argv, reply, cap);
+}
+
+static size_t no_read(void *ctx, uint8_t *b, size_t n)
+{
+	(void)ctx, (void)b, (void)n;
+	return 0;
+}
+
+static size_t sink(void *ctx, const uint8_t *b, size_t n)
+{
+	(void)ctx, (void)b;
+	return n;
 }
 
 /* setPower and setServo fail by raising a fault (the relay, the drives),
@@ -78,6 +96,13 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	vs_config_defaults(&cfg);
 	if (sim_init(&S, &cfg, NULL) != 0)
 		abort();
+	{
+		const vs_link_t io = {no_read, sink, NULL};
+
+		server_serve_serial(&S.srv, &SER, &io);
+	}
+	next_extra = S.srv.con.extra;
+	next_xctx = S.srv.con.xctx;
 	console_set_extra(&S.srv.con, extra, &S);
 	sim_set_output(&S, on_write, NULL);
 

@@ -1,5 +1,7 @@
 /* Fuzz target: the binary frame decoder and the unit's frame server
- * (proto/frame.c, wire.c) on a unit on the simulated plant.
+ * (proto/frame.c, wire.c) on a unit on the simulated plant, with the
+ * telemetry stream's subscription (proto/stream.c) as the serial server has
+ * it: every stream frame due after a tick is encoded and read back.
  *
  * Input: chunks, each a control byte (bits 0-5: chunk length, bits 6-7:
  * time since the previous chunk: 0, 1, 60 or 150 ms, so the inter-byte
@@ -14,12 +16,46 @@
 
 #include "../../host_sim/sim.h"
 #include "../../proto/frame.h"
+#include "../../proto/stream.h"
 
 static sim_t S;
 static frame_srv_t srv;
 static frame_rx_t back; /* parses what the unit sent */
 static uint8_t back_buf[FRAME_RESP_MAX];
 static uint32_t back_frames;
+static stream_sub_t sub;
+
+static size_t on_stream(void *ctx, const uint8_t *p, size_t len, uint8_t *resp, int *st)
+{
+	(void)ctx;
+	size_t n = stream_subscribe(&sub, S.vehicle.cfg.tick_hz, S.vehicle.ticks, p, len, resp, st);
+	if ((*st == WIRE_ST_OK) != (n == STREAM_RESP_LEN))
+		abort();
+	return n;
+}
+
+/* A due stream frame, as the serial server sends it: it decodes to its
+ * mask and tick, and the rate in force fits the line. */
+static void stream_tick(void)
+{
+	uint8_t p[STREAM_PAYLOAD_MAX];
+	stream_sample_t smp, back_smp;
+	uint16_t mask;
+	uint32_t tick;
+	size_t n;
+
+	if (!stream_due(&sub, S.vehicle.ticks))
+		return;
+	if (!stream_fits(sub.mask, sub.period_ms, sub.baud))
+		abort();
+	stream_read(&S.vehicle, &smp);
+	n = stream_encode(&smp, sub.mask, S.vehicle.ticks, p, sizeof(p));
+	memset(&back_smp, 0, sizeof(back_smp));
+	if (n != stream_payload_len(sub.mask) ||
+	    stream_decode(p, n, &mask, &tick, &back_smp) != 0 || mask != sub.mask ||
+	    tick != S.vehicle.ticks)
+		abort();
+}
 
 static void on_back_frame(void *ctx, const frame_t *f)
 {
@@ -63,6 +99,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	if (sim_init(&S, &cfg, NULL) != 0)
 		abort();
 	frame_srv_init(&srv, &S.vehicle, on_write, NULL, on_other, NULL);
+	stream_sub_init(&sub, STREAM_BAUD);
+	frame_srv_set_stream(&srv, on_stream, NULL);
 	frame_rx_init(&back, back_buf, FRAME_RESP_PAYLOAD_MAX, on_back_frame, on_back_other, NULL);
 	back_frames = 0;
 
@@ -80,6 +118,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 			abort();
 		/* a little time for the unit between chunks */
 		sim_tick(&S);
+		stream_tick();
 	}
 	frame_srv_poll(&srv, now + 1000);
 	if (frame_rx_busy(&srv.rx) || back_frames < srv.st.executed)
