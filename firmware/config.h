@@ -12,8 +12,13 @@
 
 #include "real.h"
 
-#define VS_MAX_AXES    4
-#define VS_MAX_IO      32
+#define VS_MAX_AXES 4
+/* io.xml entries a configuration holds (a board's build sets fewer: each
+ * costs 32 bytes in every vs_config_t, the unit's own and the one $config
+ * judges on the stack). */
+#ifndef VS_MAX_IO
+#define VS_MAX_IO 32
+#endif
 #define VS_IO_NAME_MAX 24
 
 typedef enum {

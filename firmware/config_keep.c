@@ -212,17 +212,16 @@ cfgkeep_result_t cfgkeep_restore(cfgkeep_t *k, bool saved, const char **field)
 	return commit(k, &cand, field);
 }
 
-cfgkeep_result_t cfgkeep_save(cfgkeep_t *k, const char **field)
+cfgkeep_result_t cfgkeep_save(cfgkeep_t *k, uint8_t *buf, size_t cap, const char **field)
 {
 	static const char *const why[] = {[CFGSTORE_TOO_BIG] = "too big",
 					  [CFGSTORE_IO] = "store error",
 					  [CFGSTORE_VERIFY] = "verify failed",
 					  [CFGSTORE_NO_STORE] = "store unusable"};
-	uint8_t buf[CFGKEEP_PAYLOAD_MAX]; /* the saved form while it is written */
 	if (!k->store)
 		return CFGKEEP_NO_STORE;
 	cfgkeep_sync(k);
-	size_t n = vs_config_encode(&k->want, &k->base, buf, sizeof buf);
+	size_t n = vs_config_encode(&k->want, &k->base, buf, cap);
 	cfgstore_status_t st =
 	    n ? cfgstore_save(k->store, buf, (uint32_t)n, vs_config_schema()) : CFGSTORE_TOO_BIG;
 	if (st != CFGSTORE_OK) {

@@ -13,9 +13,10 @@
  *
  * The keeper holds the three as their rows only (cfgkeep_rows_t, 280 bytes
  * on a board where a vs_config_t has 1.3 KiB): a change is judged on the
- * stack, a copy of the running configuration with the wanted rows, and the
- * saved form is built on the stack (CFGKEEP_PAYLOAD_MAX) only while it is
- * read or written, so that a board's RAM holds no more than the rows.
+ * stack, a copy of the running configuration with the wanted rows; the
+ * saved form is read at start into the stack, and written from the
+ * caller's scratch (the console's), so that a board's RAM holds no more
+ * than the rows.
  */
 #ifndef VS_CONFIG_KEEP_H
 #define VS_CONFIG_KEEP_H
@@ -92,8 +93,9 @@ cfgkeep_result_t cfgkeep_set(cfgkeep_t *k, const vs_config_field_t *f, const voi
 			     const char **field);
 /* Every field as in the base (defaults) or as saved (reload). */
 cfgkeep_result_t cfgkeep_restore(cfgkeep_t *k, bool saved, const char **field);
-/* Writes the wanted configuration to the store. */
-cfgkeep_result_t cfgkeep_save(cfgkeep_t *k, const char **field);
+/* Writes the wanted configuration to the store; buf (cap bytes, the
+ * caller's scratch: VS_CFGSAVE_MAX suffice) holds its saved form meanwhile. */
+cfgkeep_result_t cfgkeep_save(cfgkeep_t *k, uint8_t *buf, size_t cap, const char **field);
 
 /* The ANY rows of the wanted configuration as the unit runs them (what
  * $watchdog and $jerk set): before the queries below. */

@@ -26,6 +26,12 @@
 #define VS_CFGSAVE_FORMAT 'D'
 #endif
 
+/* The largest saved form of this table (every element differs): what a
+ * save needs at most. A record another table wrote may be larger. */
+#define VS_CFGSAVE_ROW_MAX(m, n, ...)                                                              \
+	+(n) * (4u + sizeof(#m) - 1u + sizeof(((vs_config_t *)0)->m) / (n))
+enum { VS_CFGSAVE_MAX = 4u VS_CONFIG_FIELDS(VS_CFGSAVE_ROW_MAX) };
+
 uint32_t vs_config_schema(void);
 /* Bytes of one element of a row's type (vs_config_type_t). */
 uint8_t vs_config_type_size(uint8_t type);

@@ -359,7 +359,8 @@ static bool exec_jerk(console_t *c, char **argv, unsigned ntok, rbuf_t *r)
 	return true;
 }
 
-static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_t *r)
+static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_t *r,
+		       cmd_scratch_t *scratch)
 {
 	const char *cmd = argv[0];
 
@@ -390,10 +391,13 @@ static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_
 	}
 	if (np_streq_nocase(cmd, "$config")) {
 #ifdef VS_NO_CONFIG_EXTRA
-		/* Its configuration is compiled in (hal/cortexm/board_main.c). */
+		/* Its configuration is compiled in. */
+		(void)scratch;
 		return reply_error(c, r, "%d $config is not in this build", CONSOLE_E_EXTRA);
 #else
-		console_config(c, argv, ntok, r->buf, r->cap);
+		/* $config save writes the saved form from the operations'
+		 * scratch, free on a console line. */
+		console_config(c, argv, ntok, r->buf, r->cap, scratch, sizeof *scratch);
 		r->len = strlen(r->buf);
 		if (r->buf[0] == 'e')
 			c->errors++;
@@ -529,7 +533,7 @@ static bool exec_line(console_t *c, const char *line, size_t len, rbuf_t *r)
 		if (ntok > CONSOLE_ARGV_MAX)
 			return reply_error(c, r, "%d %s: too many arguments (%u)", CONSOLE_E_ARITY,
 					   argv[0], ntok - 1);
-		bool said = exec_extra(c, (int)ntok, argv, ntok, r);
+		bool said = exec_extra(c, (int)ntok, argv, ntok, r, &scratch);
 		if (said && r->len >= 2 && r->buf[0] == 'o' && r->buf[1] == 'k')
 			vehicle_link_heard(c->v, VS_LINK_CONSOLE);
 		return said;

@@ -61,8 +61,10 @@ void console_set_extra(console_t *c, console_extra_fn fn, void *ctx);
  * attached to the same unit); without one it only reads. */
 void console_set_keep(console_t *c, struct cfgkeep *keep);
 /* The $config extra (console_config.c): the reply, "ok ..." or "error ...",
- * into reply (cap bytes). */
-void console_config(console_t *c, char **argv, unsigned ntok, char *reply, size_t cap);
+ * into reply (cap bytes); scratch: room for the saved form while $config
+ * save writes it (VS_CFGSAVE_MAX bytes, firmware/config_save.h). */
+void console_config(console_t *c, char **argv, unsigned ntok, char *reply, size_t cap,
+		    void *scratch, size_t scratch_cap);
 /* What the configuration store held at start, as $config store answers it
  * without "ok " (a main's log line). */
 void console_config_store(const struct cfgkeep *k, char *buf, size_t cap);

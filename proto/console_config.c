@@ -16,6 +16,7 @@
 
 #include "../firmware/config_keep.h"
 #include "../firmware/config_save.h"
+#include "cmdtab.h"
 #include "console.h"
 #include "fmt.h"
 #include "numparse.h"
@@ -35,6 +36,10 @@ struct config_list_bytes {
 };
 _Static_assert(2 + sizeof(struct config_list_bytes) <= CONSOLE_REPLY_MAX,
 	       "$config's list fits one reply");
+
+/* $config save writes the saved form from the console's operation scratch
+ * (console.c). */
+_Static_assert(sizeof(cmd_scratch_t) >= VS_CFGSAVE_MAX, "the saved form fits the scratch");
 
 /* No row has more elements than set_field holds. */
 #define ROW_FITS(m, n, ...) _Static_assert((n) <= VS_MAX_AXES, #m " fits set_field");
@@ -282,7 +287,8 @@ static void put_store(out_t *o, const cfgkeep_boot_t *b)
 }
 
 /* The subcommands that need the keeper; false: argv[1] is none of them. */
-static bool keeper_command(out_t *o, console_t *c, char **argv, unsigned ntok)
+static bool keeper_command(out_t *o, console_t *c, char **argv, unsigned ntok, void *scratch,
+			   size_t scratch_cap)
 {
 	static const char *const cmds[] = {"diff", "save", "defaults", "reload", "store"};
 	cfgkeep_t *k = c->keep;
@@ -310,7 +316,7 @@ static bool keeper_command(out_t *o, console_t *c, char **argv, unsigned ntok)
 		put_names(o, k, "pending", cfgkeep_pending);
 		return true;
 	case 1:
-		r = cfgkeep_save(k, &bad);
+		r = cfgkeep_save(k, scratch, scratch_cap, &bad);
 		if (r != CFGKEEP_OK) {
 			refused(o, cmds[i], r, bad);
 		} else {
@@ -355,7 +361,8 @@ void console_config_diag(const console_t *c, char *buf, size_t cap)
 	put_store(&o, b);
 }
 
-void console_config(console_t *c, char **argv, unsigned ntok, char *reply, size_t cap)
+void console_config(console_t *c, char **argv, unsigned ntok, char *reply, size_t cap,
+		    void *scratch, size_t scratch_cap)
 {
 	out_t o = {reply, cap, 0};
 	const vs_config_field_t *f;
@@ -368,7 +375,7 @@ void console_config(console_t *c, char **argv, unsigned ntok, char *reply, size_
 			put(&o, " %s", vs_config_fields[i].name);
 		return;
 	}
-	if (keeper_command(&o, c, argv, ntok))
+	if (keeper_command(&o, c, argv, ntok, scratch, scratch_cap))
 		return;
 	f = find_field(argv[1], &elem);
 	if (!f) {
