@@ -18,6 +18,7 @@
 #include <stdint.h>
 
 #include "alarm.h"
+#include "blackbox.h"
 #include "config.h"
 #include "kin.h"
 #include "motion.h"
@@ -157,6 +158,9 @@ typedef struct {
 	uint8_t mode; /* motion_mode_t */
 } vs_diag_t;
 void vehicle_diag(const vehicle_t *v, vs_diag_t *d);
+/* The black box (blackbox.h) records into cap samples at buf, one every
+ * `every` ticks; off until given storage. Read it at v->bbox. */
+void vehicle_blackbox(vehicle_t *v, bbox_sample_t *buf, uint16_t cap, uint16_t every);
 
 /* Firmware-internal: the fixed-point core that vs_api.c (the double
  * boundary) calls after converting and range-checking the arguments. */
@@ -228,6 +232,7 @@ struct vehicle {
 	uint32_t inpos_ticks, settle_ticks;
 	char state_msg[VS_STATE_MSG_MAX];
 	/* Large and seldom read: last. */
+	blackbox_t bbox;
 	alarm_list_t alarms;
 	vs_config_t cfg;
 };

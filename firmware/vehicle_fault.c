@@ -68,6 +68,7 @@ void vehicle_servo_off(vehicle_t *v)
 void vehicle_raise_fault(vehicle_t *v, uint32_t code, const char *text)
 {
 	alarm_raise(&v->alarms, code, text);
+	bbox_fault(&v->bbox, code);
 	motion_halt(&v->motion);
 	vehicle_servo_off(v);
 }

@@ -43,6 +43,8 @@ void vehicle_servo_off(vehicle_t *v);
 /* Read every drive once (vehicle_tick.c): what the tick does first. */
 void vehicle_sample_drives(vehicle_t *v);
 void vehicle_raise_fault(vehicle_t *v, uint32_t code, const char *text);
+/* The tick's black box sample (vehicle.c), when bbox_due. */
+void vehicle_bbox_record(vehicle_t *v);
 void vehicle_raise_fault_level(vehicle_t *v, uint32_t code, const char *text);
 
 #endif

@@ -607,4 +607,8 @@ void vehicle_tick(vehicle_t *v, uint32_t now_us)
 	for (uint8_t i = 0; i < v->naxes; i++)
 		v->hal.ops->drive_set_velocity(v->hal.ctx, i, v->wheel_cps_q8[i]);
 	v->ticks++;
+	/* Recorded here, out of the motion tick: its cost is bbox's line in
+	 * make bench. */
+	if (bbox_due(&v->bbox))
+		vehicle_bbox_record(v);
 }

@@ -7,7 +7,7 @@ static const char header[] =
     "time_s,cmd_x_mm,cmd_y_mm,cmd_th_deg,odo_x_mm,odo_y_mm,odo_th_deg,"
     "true_x_mm,true_y_mm,true_th_deg,cmd_vx_mm_s,cmd_vy_mm_s,cmd_w_deg_s,"
     "sp0_cps,sp1_cps,sp2_cps,sp3_cps,meas0_cps,meas1_cps,meas2_cps,meas3_cps,"
-    "state,queue_len,alarms,newest_alarm\n";
+    "state,queue_len,alarms,newest_alarm,enc0,enc1,enc2,enc3\n";
 
 static double q32(q32_t v)
 {
@@ -60,8 +60,12 @@ void trace_tick(trace_t *t, double time_s, vehicle_t *v, const plant_t *pl)
 	vs_alarm_t newest;
 	uint16_t got = 0;
 	vs_getActiveAlarm(v, 1, &alarms, &newest, &got);
-	fprintf(t->f, ",%d,%u,%d,%lu\n", state, (unsigned)d.queue_len, alarms,
+	fprintf(t->f, ",%d,%u,%d,%lu", state, (unsigned)d.queue_len, alarms,
 		got ? (unsigned long)newest.code : 0ul);
+	/* The encoders as the unit read them: the black box's measurement. */
+	for (int a = 0; a < VS_MAX_AXES; a++)
+		fprintf(t->f, ",%ld", (long)v->meas_counts[a]);
+	fputc('\n', t->f);
 	/* A reader that follows the file while the simulator runs (a test
 	 * waiting for a stop without asking the unit) sees each change. */
 	if (state != t->last_state)

@@ -13,6 +13,7 @@
  *   queue_len                       queued motion commands
  *   alarms                          active alarms (getActiveAlarm's count)
  *   newest_alarm                    code of the newest active alarm, 0: none
+ *   enc0..enc3                      encoder positions the unit read, counts
  * Axes a base does not have read 0.
  */
 #ifndef TRACE_H

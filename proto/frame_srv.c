@@ -4,6 +4,7 @@
 
 #include <string.h>
 
+#include "bbox_wire.h"
 #include "dispatch.h"
 
 static void srv_nak(frame_srv_t *s, uint8_t seq, uint8_t op, int status)
@@ -73,6 +74,8 @@ static void srv_frame(void *ctx, const frame_t *f)
 		n = run_line(s, f, resp, sizeof(resp), &st);
 	else if (f->op == WIRE_OP_STREAM && s->stream)
 		n = s->stream(s->sctx, f->payload, f->len, resp, &st);
+	else if (f->op == WIRE_OP_BBOX)
+		n = bbox_wire_serve(s->v, f->payload, f->len, resp, &st);
 	else
 		n = wire_dispatch(s->v, f->op, f->payload, f->len, resp, sizeof(resp), &st);
 	if (st != WIRE_ST_OK) {

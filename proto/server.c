@@ -3,14 +3,30 @@
 
 #include <string.h>
 
+#include "bbox_wire.h"
+#include "numparse.h"
+
+/* The console's $bbox, before the main's own extras. */
+static bool bbox_extra(void *ctx, int argc, char **argv, char *reply, size_t cap)
+{
+	vs_server_t *s = ctx;
+
+	if (argc >= 1 && np_streq_nocase(argv[0], "$bbox")) {
+		bbox_console(s->v, argc, argv, reply, cap);
+		return true;
+	}
+	return s->main_extra ? s->main_extra(s->main_xctx, argc, argv, reply, cap) : false;
+}
+
 void server_init(vs_server_t *s, vehicle_t *v, console_extra_fn extra, void *xctx,
 		 console_write_fn write, void *wctx)
 {
 	memset(s, 0, sizeof(*s));
 	s->v = v;
 	console_init(&s->con, v, write, wctx);
-	if (extra)
-		console_set_extra(&s->con, extra, xctx);
+	s->main_extra = extra;
+	s->main_xctx = xctx;
+	console_set_extra(&s->con, bbox_extra, s);
 }
 
 void server_attach_serial(vs_server_t *s, const vs_link_t *io)

@@ -98,9 +98,12 @@ struct vs_server {
 	uint32_t can_port_errors;			   /* receive errors the port reported */
 	uint32_t last_us, us_rem, now_ms;		   /* server_poll's millisecond clock */
 	void (*poll_can)(vs_server_t *s, uint32_t now_us); /* set by server_attach_can */
+	console_extra_fn main_extra; /* the main's extras, after $bbox */
+	void *main_xctx;
 };
 
-/* The console on v, its '$' extras handled first by extra (NULL: none).
+/* The console on v, its '$' extras handled first by extra (NULL: none)
+ * after $bbox (the black box, bbox_wire.h).
  * Replies of lines fed straight to the console go to write (NULL: they are
  * dropped) until a serial link takes the output over. */
 void server_init(vs_server_t *s, vehicle_t *v, console_extra_fn extra, void *xctx,

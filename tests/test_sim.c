@@ -242,16 +242,16 @@ static void tick_callback_and_trace(void **state)
 			    "time_s,cmd_x_mm,cmd_y_mm,cmd_th_deg,odo_x_mm,odo_y_mm,odo_th_deg,"
 			    "true_x_mm,true_y_mm,true_th_deg,cmd_vx_mm_s,cmd_vy_mm_s,cmd_w_deg_s,"
 			    "sp0_cps,sp1_cps,sp2_cps,sp3_cps,meas0_cps,meas1_cps,meas2_cps,"
-			    "meas3_cps,state,queue_len,alarms,newest_alarm\n",
+			    "meas3_cps,state,queue_len,alarms,newest_alarm,enc0,enc1,enc2,enc3\n",
 			    strlen("time_s,cmd_x_mm,cmd_y_mm,cmd_th_deg,odo_x_mm,odo_y_mm,"
 				   "odo_th_deg,true_x_mm,true_y_mm,true_th_deg,cmd_vx_mm_s,"
 				   "cmd_vy_mm_s,cmd_w_deg_s,sp0_cps,sp1_cps,sp2_cps,sp3_cps,"
 				   "meas0_cps,meas1_cps,meas2_cps,meas3_cps,state,queue_len,alarms,"
-				   "newest_alarm\n"));
+				   "newest_alarm,enc0,enc1,enc2,enc3\n"));
 	const char *row1 = strchr(buf, '\n') + 1;
 	const char *want =
 	    "0.001000,0.0000,0.0000,0.0000,0.0000,0.0000,0.0000,0.0000,0.0000,"
-	    "0.0000,0.000,0.000,0.000,0.00,0.00,0.00,0.00,0.00,0.00,0.00,0.00,25,0,0,0\n";
+	    "0.0000,0.000,0.000,0.000,0.00,0.00,0.00,0.00,0.00,0.00,0.00,0.00,25,0,0,0,0,0,0,0\n";
 	assert_memory_equal(row1, want, strlen(want));
 	free(buf);
 }

@@ -37,7 +37,8 @@ class TraceDoc(unittest.TestCase):
             with open(path) as f:
                 header = f.readline().rstrip("\n").split(",")
         self.assertEqual(documented("`vehicle-sim --trace"), header)
-        self.assertEqual(header[-4:], ["state", "queue_len", "alarms", "newest_alarm"])
+        self.assertEqual(header[-8:], ["state", "queue_len", "alarms", "newest_alarm",
+                                       "enc0", "enc1", "enc2", "enc3"])
 
     def test_record_columns_are_documented_in_order(self):
         with open(os.path.join(TOP, "tools/vehiclectl_main.c")) as f:
