@@ -22,6 +22,7 @@
 #include <unistd.h>
 
 #include "../firmware/config_keep.h"
+#include "../hal/posix/bboxfile.h"
 #include "../hal/posix/config_xml.h"
 #include "../hal/posix/filestore.h"
 #include "../hal/posix/rt.h"
@@ -62,6 +63,31 @@ typedef struct {
 } app_t;
 
 static app_t app;
+/* The black box: 2 s at the tick rate (at most 10 kHz), as vehicle-fw. */
+static bbox_sample_t bbox_ring[2u * 10000u];
+static const char *bbox_path; /* --bbox-file */
+static bool bbox_written;
+
+/* After each tick: a fault froze the black box, written once to
+ * --bbox-file; a clear re-arms the write. */
+static void look_at_bbox(void *ctx, sim_t *s)
+{
+	(void)ctx;
+	if (s->vehicle.bbox.status != BBOX_FROZEN) {
+		bbox_written = false;
+		return;
+	}
+	if (bbox_written)
+		return;
+	bbox_written = true;
+	if (bbox_file_write_ring(bbox_path, &s->vehicle.bbox, s->cfg.tick_hz) < 0)
+		fprintf(stderr, "vehicle-sim: black box: %s: %s\n", bbox_path, strerror(errno));
+	else
+		fprintf(stderr, "vehicle-sim: black box: fault %lu at tick %lu, %u samples in %s\n",
+			(unsigned long)s->vehicle.bbox.fault,
+			(unsigned long)s->vehicle.bbox.trigger, (unsigned)s->vehicle.bbox.count,
+			bbox_path);
+}
 /* The configuration changed at run time, and its file (--store). */
 static cfgkeep_t keep;
 static filestore_t store;
@@ -329,6 +355,8 @@ static void usage(FILE *f)
 	      "                  (default: --realtime on a terminal, else --fast)\n"
 	      "  --trace FILE    CSV trace, one row per tick (columns: docs/trace.md)\n"
 	      "  --trace-every N one trace row every N ticks\n"
+	      "  --bbox-file FILE  write the black box (2 s of ticks) to FILE when a fault\n"
+	      "                  freezes it (docs/linux.md)\n"
 	      "  --ideal         ideal plant: no motor lag, no acceleration/current limit, and\n"
 	      "                  the finest power-of-two encoder resolution up to 2^20 counts\n"
 	      "                  that the configured speed limits admit (replaces a coarser\n"
@@ -390,7 +418,8 @@ int main(int argc, char **argv)
 		O_HZ,
 		O_PTY,
 		O_BAUD,
-		O_STORE
+		O_STORE,
+		O_BBOX
 	};
 	static const struct option opts[] = {
 	    {"config", required_argument, NULL, O_CONFIG},
@@ -407,6 +436,7 @@ int main(int argc, char **argv)
 	    {"pty", no_argument, NULL, O_PTY},
 	    {"baud", required_argument, NULL, O_BAUD},
 	    {"store", required_argument, NULL, O_STORE},
+	    {"bbox-file", required_argument, NULL, O_BBOX},
 	    {NULL, 0, NULL, 0},
 	};
 	int o;
@@ -452,6 +482,9 @@ int main(int argc, char **argv)
 			break;
 		case O_STORE:
 			store_path = optarg;
+			break;
+		case O_BBOX:
+			bbox_path = optarg;
 			break;
 		case O_BAUD: {
 			char *end;
@@ -538,6 +571,9 @@ int main(int argc, char **argv)
 		return 1;
 	}
 	cfgkeep_attach(&keep, &a->sim.vehicle);
+	vehicle_blackbox(&a->sim.vehicle, bbox_ring, (uint16_t)(2u * cfg.tick_hz), 1);
+	if (bbox_path)
+		sim_set_tick_cb(&a->sim, look_at_bbox, NULL);
 	console_set_keep(&a->sim.srv.con, &keep);
 	if (store_path) {
 		console_config_store(&keep, err, sizeof(err));

@@ -20,6 +20,7 @@
 #include <unistd.h>
 
 #include "../../firmware/config_keep.h"
+#include "../posix/bboxfile.h"
 #include "../posix/config_xml.h"
 #include "../posix/filestore.h"
 #include "backend_cfg.h"
@@ -62,12 +63,36 @@ typedef struct {
 	rt_status_t rt;
 	rt_stats_t st;
 	rt_clock_t clk;
-	alarm_log_t alarms; /* the list at the last look: its changes go to the log */
-	cfgkeep_t keep;	    /* the configuration changed at run time */
-	filestore_t store;  /* --store: where it is saved */
+	alarm_log_t alarms;    /* the list at the last look: its changes go to the log */
+	cfgkeep_t keep;	       /* the configuration changed at run time */
+	filestore_t store;     /* --store: where it is saved */
+	const char *bbox_path; /* --bbox-file: the black box written on a fault */
+	bool bbox_written;     /* ... this freeze's */
 } app_t;
 
 static app_t app;
+/* The black box: 2 s at the tick rate (at most 10 kHz, config_fields.def). */
+#define BBOX_SECONDS 2u
+static bbox_sample_t bbox_ring[BBOX_SECONDS * 10000u];
+
+/* A fault froze the black box: written once to --bbox-file (a few hundred
+ * KiB, after the unit stopped); a clear re-arms the write. */
+static void look_at_bbox(app_t *a)
+{
+	if (a->v.bbox.status != BBOX_FROZEN) {
+		a->bbox_written = false;
+		return;
+	}
+	if (a->bbox_written || !a->bbox_path)
+		return;
+	a->bbox_written = true;
+	if (bbox_file_write_ring(a->bbox_path, &a->v.bbox, a->v.cfg.tick_hz) < 0)
+		rt_log(LOG_ERR, "black box: %s: %s", a->bbox_path, strerror(errno));
+	else
+		rt_log(LOG_NOTICE, "black box: fault %lu at tick %lu, %u samples in %s",
+		       (unsigned long)a->v.bbox.fault, (unsigned long)a->v.bbox.trigger,
+		       (unsigned)a->v.bbox.count, a->bbox_path);
+}
 
 static void log_alarm(void *ctx, const char *line)
 {
@@ -159,6 +184,7 @@ static void tick(app_t *a, bool serve)
 		server_poll(&a->srv, us);
 		look_at_alarms(a);
 	}
+	look_at_bbox(a);
 	a->st.ticks++;
 	uint64_t busy = (cpu_ns() - c0) / 1000u;
 	uint32_t busy_us = busy > UINT32_MAX ? UINT32_MAX : (uint32_t)busy;
@@ -218,6 +244,8 @@ static void usage(FILE *f)
 	      "  --status-hz N   CAN status frame rate, 0 (off)..1000 (default 10)\n"
 	      "  --store FILE    keep the configuration changed at run time in FILE ($config\n"
 	      "                  save; read at start over the vehicle file; default: none)\n"
+	      "  --bbox-file FILE  write the black box to FILE when a fault freezes it\n"
+	      "                  (docs/linux.md; default: none)\n"
 	      "  --log stderr|syslog  where messages go (default stderr)\n"
 	      "  --rt-priority N SCHED_FIFO priority 1..99, 0 for none (default 80)\n"
 	      "  --help          this text\n",
@@ -225,7 +253,7 @@ static void usage(FILE *f)
 }
 
 typedef struct {
-	const char *config_path, *io_path, *port, *can_iface, *store_path;
+	const char *config_path, *io_path, *port, *can_iface, *store_path, *bbox_path;
 	unsigned long baud, prio, can_node, can_hz;
 	bool use_syslog;
 	char io_buf[1024];
@@ -267,7 +295,8 @@ static int parse_args(int argc, char **argv, opts_t *o)
 		O_CAN,
 		O_NODE,
 		O_HZ,
-		O_STORE
+		O_STORE,
+		O_BBOX
 	};
 	static const struct option opts[] = {
 	    {"config", required_argument, NULL, O_CONFIG},
@@ -281,6 +310,7 @@ static int parse_args(int argc, char **argv, opts_t *o)
 	    {"node", required_argument, NULL, O_NODE},
 	    {"status-hz", required_argument, NULL, O_HZ},
 	    {"store", required_argument, NULL, O_STORE},
+	    {"bbox-file", required_argument, NULL, O_BBOX},
 	    {NULL, 0, NULL, 0},
 	};
 	int c, rc = 0;
@@ -300,6 +330,9 @@ static int parse_args(int argc, char **argv, opts_t *o)
 			break;
 		case O_STORE:
 			o->store_path = optarg;
+			break;
+		case O_BBOX:
+			o->bbox_path = optarg;
 			break;
 		case O_BAUD:
 			rc = number_opt("baud", optarg, 1, 4000000, &o->baud);
@@ -417,6 +450,8 @@ static int open_unit(app_t *a, const opts_t *o, backend_cfg_t *bk)
 		return -1;
 	}
 	cfgkeep_attach(&a->keep, &a->v);
+	vehicle_blackbox(&a->v, bbox_ring, (uint16_t)(BBOX_SECONDS * cfg.tick_hz), 1);
+	a->bbox_path = o->bbox_path;
 	rt_clock_start(&a->clk, 1000000u / cfg.tick_hz);
 	return 0;
 }
