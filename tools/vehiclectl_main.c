@@ -23,6 +23,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "../hal/posix/bboxfile.h"
 #include "../proto/client/client.h"
 #include "../proto/cmdtab.h"
 #include "../proto/numparse.h"
@@ -65,7 +66,9 @@ static void usage(FILE *f)
 	    "                  the same as CSV rows into FILE (docs/trace.md)\n"
 	    "  config [NAME [VALUE...] | NAME[K] VALUE | diff | save | defaults | reload | store]\n"
 	    "                  the unit's $config (docs/console.md): prints its reply; exit 0\n"
-	    "                  on ok, 1 when the unit refused (error ...)\n",
+	    "                  on ok, 1 when the unit refused (error ...)\n"
+	    "  bbox FILE       the unit's black box (serial frames) into FILE as CSV rows\n"
+	    "                  (docs/trace.md), its fault marked; bbox clear: empty, re-arm\n",
 	    f);
 }
 
@@ -303,6 +306,50 @@ static int cmd_info(vc_client_t *c, bool json)
 		       ops,
 		       ver == CMD_PROTO_VERSION && crc == cmd_table_crc() ? "matches"
 									  : "DIFFERS from");
+	return 0;
+}
+
+/* bbox FILE: the unit's black box into FILE (docs/trace.md, "Black box");
+ * bbox clear: emptied and re-armed. */
+static int cmd_bbox(vc_client_t *c, int argc, char **argv, bool json)
+{
+	static const char *const st[] = {"off", "armed", "frozen"};
+	static bbox_sample_t smp[UINT16_MAX];
+	static const bbox_sample_t *row[UINT16_MAX];
+	bbox_page_t pg;
+	size_t n = 0;
+	int e;
+
+	if (argc != 2) {
+		fprintf(stderr, "vehiclectl: bbox FILE | bbox clear\n");
+		return 2;
+	}
+	errno = 0;
+	if (strcmp(argv[1], "clear") == 0)
+		e = vc_bbox_clear(c, &pg);
+	else
+		e = vc_bbox_read(c, smp, UINT16_MAX, &n, &pg);
+	if (e != VC_OK)
+		return report_err(c, e);
+	const char *status = pg.status < 3 ? st[pg.status] : "?";
+	if (strcmp(argv[1], "clear") != 0) {
+		for (size_t i = 0; i < n; i++)
+			row[i] = &smp[i];
+		if (bbox_file_write(argv[1], row, (uint32_t)n, pg.tick_hz, pg.trigger, pg.fault) <
+		    0) {
+			fprintf(stderr, "vehiclectl: %s: %s\n", argv[1], strerror(errno));
+			return 3;
+		}
+	}
+	if (json)
+		printf("{\"status\":\"%s\",\"samples\":%zu,\"every\":%u,\"tick_hz\":%u,"
+		       "\"trigger\":%lu,\"fault\":%lu}\n",
+		       status, n, pg.every, pg.tick_hz, (unsigned long)pg.trigger,
+		       (unsigned long)pg.fault);
+	else
+		printf("bbox %s: %zu samples, one every %u ticks at %u Hz, fault %lu at tick %lu\n",
+		       status, n, pg.every, pg.tick_hz, (unsigned long)pg.fault,
+		       (unsigned long)pg.trigger);
 	return 0;
 }
 
@@ -701,7 +748,7 @@ int main(int argc, char **argv)
 		return cmd_help(argc, argv);
 	if (strcmp(argv[0], "info") != 0 && strcmp(argv[0], "watch") != 0 &&
 	    strcmp(argv[0], "record") != 0 && strcmp(argv[0], "wait") != 0 &&
-	    strcmp(argv[0], "config") != 0) {
+	    strcmp(argv[0], "config") != 0 && strcmp(argv[0], "bbox") != 0) {
 		d = cmd_by_name(argv[0]);
 		if (!d) {
 			fprintf(stderr, "vehiclectl: no operation %s (try 'vehiclectl help')\n",
@@ -757,6 +804,8 @@ int main(int argc, char **argv)
 		rc = cmd_info(c, json);
 	} else if (strcmp(argv[0], "config") == 0) {
 		rc = cmd_config(c, argc, argv, json);
+	} else if (strcmp(argv[0], "bbox") == 0) {
+		rc = cmd_bbox(c, argc, argv, json);
 	} else {
 		rc = loop_cmd(c, argc, argv, json, strcmp(argv[0], "record") == 0);
 	}

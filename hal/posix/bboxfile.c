@@ -3,7 +3,6 @@
 
 #include <errno.h>
 #include <stdio.h>
-#include <stdlib.h>
 
 #include "../../proto/bbox_wire.h"
 
@@ -44,24 +43,5 @@ int bbox_file_write(const char *path, const bbox_sample_t *const *s, uint32_t n,
 		remove(tmp);
 		errno = e;
 	}
-	return rc;
-}
-
-int bbox_file_write_ring(const char *path, const blackbox_t *b, uint32_t tick_hz)
-{
-	const bbox_sample_t **s;
-	int rc;
-
-	if (b->status != BBOX_FROZEN) {
-		errno = EAGAIN;
-		return -1;
-	}
-	s = malloc(((size_t)b->count + 1u) * sizeof(*s));
-	if (!s)
-		return -1;
-	for (uint16_t i = 0; i < b->count; i++)
-		s[i] = bbox_get(b, i);
-	rc = bbox_file_write(path, s, b->count, tick_hz, b->trigger, b->fault);
-	free(s);
 	return rc;
 }

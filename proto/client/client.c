@@ -158,6 +158,55 @@ int vc_stream_unsubscribe(vc_client_t *c)
 	return vc_stream_subscribe(c, 0, 0, NULL);
 }
 
+static int bbox_request(vc_client_t *c, uint8_t action, uint16_t index, bbox_page_t *pg,
+			bbox_sample_t *s)
+{
+	uint8_t req[BBOX_REQ_LEN] = {action, (uint8_t)(index & 0xFFu), (uint8_t)(index >> 8)};
+	bbox_sample_t scratch[BBOX_PAGE];
+	size_t n = 0;
+	int e;
+
+	if (!c->t.name || strcmp(c->t.name, "serial") != 0)
+		return VC_E_UNSUPPORTED;
+	e = exchange(c, WIRE_OP_BBOX, req, sizeof(req), &n);
+	if (e != VC_OK)
+		return e;
+	if (!bbox_wire_decode(c->resp, n, pg, s ? s : scratch) || pg->index != index)
+		return VC_E_PROTO;
+	return VC_OK;
+}
+
+int vc_bbox_page(vc_client_t *c, uint16_t index, bbox_page_t *pg, bbox_sample_t *s)
+{
+	return bbox_request(c, BBOX_READ, index, pg, s);
+}
+
+int vc_bbox_clear(vc_client_t *c, bbox_page_t *pg)
+{
+	return bbox_request(c, BBOX_CLEAR, 0, pg, NULL);
+}
+
+int vc_bbox_read(vc_client_t *c, bbox_sample_t *s, size_t cap, size_t *n, bbox_page_t *pg)
+{
+	bbox_sample_t page[BBOX_PAGE];
+	size_t got = 0;
+	int e;
+
+	do {
+		if (got > UINT16_MAX)
+			return VC_E_PROTO;
+		e = vc_bbox_page(c, (uint16_t)got, pg, page);
+		if (e != VC_OK)
+			return e;
+		if (got + pg->n > cap)
+			return VC_E_ARG;
+		memcpy(s + got, page, pg->n * sizeof(*page));
+		got += pg->n;
+	} while (pg->n > 0 && got < pg->count);
+	*n = got;
+	return VC_OK;
+}
+
 int vc_stream_next(vc_client_t *c, vc_sample_t *s, unsigned timeout_ms)
 {
 	uint8_t p[STREAM_PAYLOAD_MAX];

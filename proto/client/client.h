@@ -30,6 +30,7 @@
 
 #include "../../hal/link.h"
 #include "../cmdtab.h"
+#include "../bbox_wire.h"
 #include "../stream.h"
 #include "../wire.h"
 
@@ -149,6 +150,17 @@ typedef struct {
 /* The next sample, waiting up to timeout_ms (VC_E_TIMEOUT); VC_E_PROTO for
  * a frame that does not decode. */
 int vc_stream_next(vc_client_t *c, vc_sample_t *s, unsigned timeout_ms);
+
+/* The black box (docs/protocol.md "Black box"; serial frames only:
+ * VC_E_UNSUPPORTED on the console and CAN). vc_bbox_page: the answer for
+ * the samples from index (its header in pg, its samples in s, room for
+ * BBOX_PAGE); an index past the count is VC_E_NAK (WIRE_ST_VALUE).
+ * vc_bbox_read: every sample, page by page, into s (room for cap), *n of
+ * them; a ring still recording moves between pages (read it frozen).
+ * vc_bbox_clear: empties and re-arms it. */
+int vc_bbox_page(vc_client_t *c, uint16_t index, bbox_page_t *pg, bbox_sample_t *s);
+int vc_bbox_read(vc_client_t *c, bbox_sample_t *s, size_t cap, size_t *n, bbox_page_t *pg);
+int vc_bbox_clear(vc_client_t *c, bbox_page_t *pg);
 
 /* The operations, in spec order. */
 int vc_clearAlarm(vc_client_t *c, bool *ret);

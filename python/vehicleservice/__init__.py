@@ -10,6 +10,7 @@ console lines on the serial port (python3-serial), or the CAN link
         v.wait_done()          # Ready, or Warning-### while idle
         print(v.getPosition().value)
 """
+from .bbox import BlackBox, BoxSample  # noqa: F401
 from .client import (DONE_STATES, STOPPED_STATES, ActiveAlarms, Acceleration, Alarm,  # noqa: F401
                      Position, Reply, State, Vehicle, Velocity, open_can, open_console, open_frames)
 from .errors import (ConsoleError, LinkTimeout, MotionStopped, NakError, ProtocolError,  # noqa: F401

@@ -13,6 +13,7 @@ import struct
 import time
 from typing import Generic, List, NamedTuple, TypeVar
 
+from . import bbox as _bbox
 from .errors import ConsoleError, MotionStopped, ProtocolError, WaitTimeout
 from .ops import (ALARM_TYPES, OP_CONSOLE, OPERATIONS, PROTOCOL_VERSION, AlarmType, decode_info,
                   decode_outs, encode_args, table_crc)
@@ -235,6 +236,20 @@ class Vehicle:
     def unsubscribe(self) -> None:
         """Ends the stream (mask 0)."""
         self.transport.exchange(OP_STREAM, struct.pack("<HH", 0, 0))
+
+    def read_bbox(self) -> "_bbox.BlackBox":
+        """The black box (docs/protocol.md, "Black box"), every sample, page
+        by page: read it frozen (a ring still recording moves between
+        pages). Binary frames only."""
+        if not isinstance(self.transport, FrameTransport):
+            raise NotImplementedError("the black box is read on binary frames only")
+        return _bbox.read(self.transport.exchange)
+
+    def clear_bbox(self) -> None:
+        """Empties the black box and re-arms it."""
+        if not isinstance(self.transport, FrameTransport):
+            raise NotImplementedError("the black box is read on binary frames only")
+        _bbox.clear(self.transport.exchange)
 
     def _ok(self, name, *args) -> bool:
         return self.call(name, *args)[0]

@@ -1,5 +1,6 @@
-"""vehicle-plot: a run at a glance, from the CSV of ``vehicle-sim --trace`` or
-``vehiclectl record`` (columns: docs/trace.md).
+"""vehicle-plot: a run at a glance, from the CSV of ``vehicle-sim --trace``,
+``vehiclectl record`` or a black box (``vehiclectl bbox``, ``--bbox-file``;
+columns: docs/trace.md).
 
 What an engineer tuning a base looks for, one quantity and one unit per
 axis: the path in the plane (commanded and measured, with the waypoints
@@ -10,7 +11,9 @@ acceleration, each commanded and measured, with the set value (--velocity,
 --config drawn as dashed lines; the wheels' setpoints and measured speeds at
 the rim; the following error (position and heading, commanded minus
 measured, with the fault threshold); and a strip of the unit's state and
-its newest alarm over time. Measured velocity is the odometry's change over
+its newest alarm over time; a black box's fault as a vertical line with its
+code on every panel over time (its wheels measured from the encoders).
+Measured velocity is the odometry's change over
 a window of WINDOW_S (the encoders' counts make a tick's change noisy).
 Headless (matplotlib's Agg); the output's suffix picks PNG or SVG.
 
@@ -82,7 +85,9 @@ def read_trace(path):
             cols[name] = [float(v) for v in cols[name]]
         except ValueError:
             del cols[name]
-    if "cmd_x_mm" in cols:
+    if "cmd_x_mm" in cols and "fault" in cols and "enc0" in cols:
+        kind = "bbox"
+    elif "cmd_x_mm" in cols:
         kind = "sim"
     elif "tick" in cols and "meas_vx_mm_s" in cols and "x_mm" in cols:
         kind = "stream"
@@ -90,7 +95,7 @@ def read_trace(path):
         kind = "record"
     else:
         raise ValueError("%s: neither a vehicle-sim trace nor a vehiclectl record" % path)
-    if not cols.get("time_s" if kind == "sim" else "t_s"):
+    if not cols.get("time_s" if kind in ("sim", "bbox") else "t_s"):
         raise ValueError("%s: no rows" % path)
     return cols, kind
 
@@ -152,6 +157,15 @@ def segments(t, values):
 
 def analyse(cols, kind, cfg):
     """The series the panels draw, and the waypoints."""
+    fault = None
+    if kind == "bbox":
+        # the unit's own measurement: its encoders' counts over time
+        for axis in range(4):
+            cols["meas%d_cps" % axis] = derivative(cols["time_s"], cols["enc%d" % axis])
+        hit = [i for i, f in enumerate(cols["fault"]) if f]
+        if hit:
+            fault = (cols["time_s"][hit[0]], int(cols["fault"][hit[0]]))
+        kind = "sim"
     if kind == "sim":
         t = cols["time_s"]
         # body velocity -> speed along the path (sideways speed included)
@@ -218,7 +232,7 @@ def analyse(cols, kind, cfg):
             "at_meas": rate(t, k, lambda a, b: vt_meas[b] - vt_meas[a]),
             "ar_meas": rate(t, k, lambda a, b: vr_meas[b] - vr_meas[a]),
             "th_cmd": th_cmd, "th_meas": th_meas, "err": err, "err_th": err_th,
-            "wheels": wheels, "path_cmd": path_cmd, "path_meas": path_meas,
+            "wheels": wheels, "path_cmd": path_cmd, "path_meas": path_meas, "fault": fault,
             "waypoints": waypoints,
             "states": segments(t, [int(s) for s in state]) if state else [],
             "alarms": segments(t, [int(a) for a in alarm]) if alarm else None}
@@ -350,6 +364,15 @@ def draw(fig, a, cfg):
         note(follow, "no commanded pose in a vehiclectl record")
 
     timeline(strip, a)
+    if a["fault"]:
+        # the black box's trigger: where each panel over time stood then
+        tf, code = a["fault"]
+        for p in (head, vel_t, vel_r, acc_t, acc_r, wheel, follow, strip):
+            p.axvline(tf, color="black", ls="-", lw=1.0,
+                      label="fault %d" % code if p is not strip else None)
+            if p is not strip:
+                p.text(tf, 0.98, "fault %d " % code, transform=p.get_xaxis_transform(),
+                       va="top", ha="right", fontsize=8)
     for p in (path, head, vel_t, vel_r, acc_t, acc_r, wheel):
         if p.get_legend_handles_labels()[0]:
             p.legend(fontsize=7)
@@ -434,6 +457,8 @@ def plot(trace, outputs, cfg, title=None, out=sys.stdout, waypoints=None, descri
     if a["states"]:
         code = a["states"][-1][0]
         print("final_state %d %s" % (code, STATES.get(code, "?")), file=out)
+    if a["fault"]:
+        print("fault %d at %.6f" % (a["fault"][1], a["fault"][0]), file=out)
     print("samples %d duration %.3f" % (len(t), t[-1] - t[0] if t else 0.0), file=out)
     if describe_to is not None:
         describe(panels, twins, describe_to)
@@ -443,7 +468,7 @@ def plot(trace, outputs, cfg, title=None, out=sys.stdout, waypoints=None, descri
 
 def main(argv=None):
     ap = argparse.ArgumentParser(prog="vehicle-plot", description=__doc__.split("\n\n")[0])
-    ap.add_argument("trace", help="CSV of vehicle-sim --trace or vehiclectl record")
+    ap.add_argument("trace", help="CSV of vehicle-sim --trace, vehiclectl record or a black box")
     ap.add_argument("-o", "--output", action="append", default=[],
                     help="figure file, .png or .svg (repeatable)")
     ap.add_argument("--describe", action="store_true",
