@@ -34,6 +34,12 @@ echo "  period at one cycle per instruction (an M4 takes 1 for most, 2 for loads
 "$here/mcu_tickcost.sh" "$(dirname "$dir")/cortex-m4/bench.elf" | tee "$dir/mcu_tickcost.txt"
 echo
 
+echo "== 1c. the telemetry stream (docs/protocol.md): instructions per poll of the serial server after each tick of the =="
+echo "  blended cruise, nothing read, the port taking every byte; 'stream' is the difference from no subscription: a tick's"
+echo "  share, and one frame's work (the sample read, its encoding, the frame's check, the queue)"
+"$here/streamcost.sh" "$dir/streamcost" | tee "$dir/streamcost.txt"
+echo
+
 echo "== 2. trajectory accuracy: fixed-point engine (motion_tick, perfect plant) vs double reference (tools/ref) =="
 "$here/accuracy.sh" "$dir/accuracy" | tee "$dir/accuracy.txt"
 awk '

@@ -9,6 +9,9 @@
  * so tools/bench/tickcost.sh can report the mean and the largest single tick.
  * Outside valgrind the client requests do nothing and the program only runs.
  * The scenarios are those of scenario.h (also run on the Cortex-M4 image).
+ * BENCH_BBOX=1 gives the unit a black box of 2 s recording every tick (as
+ * on the vehicle computer; the rig has none otherwise): run with
+ * --toggle-collect=vehicle_bbox_record, each tick's dump is its recording.
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -18,6 +21,7 @@
 #include "scenario.h"
 
 static rig_t rig;
+static bbox_sample_t bbox_ring[2000];
 
 __attribute__((noinline)) void bench_tick(rig_t *r);
 __attribute__((noinline)) bool bench_cmd_retarget(rig_t *r, vs_position_t p);
@@ -79,6 +83,9 @@ int main(int argc, char **argv)
 	const char *nd = getenv("BENCH_NODUMP");
 	dump_each = !(nd && strcmp(nd, "1") == 0);
 	rig_init(&rig);
+	const char *bb = getenv("BENCH_BBOX");
+	if (bb && strcmp(bb, "1") == 0)
+		vehicle_blackbox(&rig.v, bbox_ring, 2000, 1);
 	long measured = bench_scenario(&rig, sc, &hooks);
 	if (measured < 0) {
 		fprintf(stderr, "usage: tickcost --list | SCENARIO, one of: %s\n", BENCH_SCENARIOS);

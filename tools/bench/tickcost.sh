@@ -30,6 +30,23 @@ for sc in "$@"; do
 			}
 		}' "$tmp/costs" | sort
 done
+# The black box's recording, in the vehicle tick after the motion tick
+# (BENCH_RECORD=1 with a scenario list):
+# its own instructions in each cruise tick, every tick recorded (2 s ring).
+if [ "$*" = "$all" ] || [ "${BENCH_RECORD:-0}" = 1 ]; then
+	find "$tmp" -name "cg.*" -delete
+	BENCH_BBOX=1 valgrind --tool=callgrind --collect-atstart=no \
+		--toggle-collect=vehicle_bbox_record --callgrind-out-file="$tmp/cg.out" \
+		"$prog" cruise >"$tmp/log" 2>&1 || { cat "$tmp/log"; exit 1; }
+	find "$tmp" -name 'cg.out.*' -exec awk '
+		/^desc: Trigger: Client Request: / { label = $5 }
+		/^summary: / && label == "tick" { print $2 }' {} + | sort -n >"$tmp/costs"
+	awk '{ v[++n] = $1; s += $1 }
+		END {
+			printf "  %-9s %-15s %6d calls  mean %6.0f  median %6d  min %6d  max %6d  (the ring'"'"'s recording alone, out of the motion tick)\n",
+				"cruise", "bbox-record", n, s / n, v[int((n + 1) / 2)], v[1], v[n]
+		}' "$tmp/costs"
+fi
 if [ "$*" = "$all" ] || [ "${BENCH_SPLIT:-0}" = 1 ]; then
 	find "$tmp" -name "cg.*" -delete
 	BENCH_NODUMP=1 $cg --callgrind-out-file="$tmp/cg.out" "$prog" cruise >"$tmp/log" 2>&1
