@@ -39,7 +39,7 @@ MCU_CPU_cortex-m0 := -mcpu=cortex-m0 -mthumb -mfloat-abi=soft
 
 # The console and binary-frame parsers; the host client and CAN mapping stay on the host.
 MCU_PROTO_SRC := $(filter $(addprefix proto/,cmdtab.c dispatch.c console.c fmt.c numparse.c wire.c frame.c \
-	frame_srv.c link.c port.c server.c console_config.c),$(PROTO_SRC))
+	frame_srv.c link.c port.c server.c console_config.c bbox_wire.c bbox_text.c),$(PROTO_SRC))
 MCU_BOARD_SRC := $(addprefix hal/cortexm/,startup.c systick.c uart.c loop_hal.c board_main.c \
 	small_libc.c udivmod64.c flashstore.c)
 

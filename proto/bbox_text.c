@@ -48,6 +48,7 @@ bool bbox_wire_decode(const uint8_t *p, size_t len, bbox_page_t *pg, bbox_sample
 	return true;
 }
 
+#ifndef VS_NO_BBOX_TEXT
 /* ---- the text form ---- */
 
 const char bbox_csv_header[] =
@@ -113,3 +114,4 @@ size_t bbox_csv_row(const bbox_sample_t *s, uint32_t tick_hz, uint32_t fault, ch
 	n += fmt_print(buf + n, cap - n, ",%lu,%lu", (unsigned long)s->tick, (unsigned long)fault);
 	return n;
 }
+#endif

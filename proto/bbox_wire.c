@@ -83,7 +83,6 @@ static const char *const status_names[] = {"off", "armed", "frozen"};
 void bbox_console(vehicle_t *v, int argc, char **argv, char *reply, size_t cap)
 {
 	blackbox_t *b = &v->bbox;
-	int64_t i;
 
 	if (argc == 1) {
 		fmt_print(reply, cap,
@@ -95,9 +94,17 @@ void bbox_console(vehicle_t *v, int argc, char **argv, char *reply, size_t cap)
 	} else if (argc == 2 && np_streq_nocase(argv[1], "clear")) {
 		bbox_clear(b);
 		fmt_print(reply, cap, "ok bbox %s", status_names[b->status]);
+#ifdef VS_NO_BBOX_TEXT
+	} else if (argc >= 2 &&
+		   (np_streq_nocase(argv[1], "header") || np_streq_nocase(argv[1], "dump"))) {
+		fmt_print(reply, cap, "error %d $bbox %s is not in this build: read it in frames",
+			  CONSOLE_E_EXTRA, argv[1]);
+#else
 	} else if (argc == 2 && np_streq_nocase(argv[1], "header")) {
 		fmt_print(reply, cap, "ok %s", bbox_csv_header);
 	} else if (argc == 3 && np_streq_nocase(argv[1], "dump")) {
+		int64_t i;
+
 		if (b->count == 0 || np_parse_int(argv[2], 0, b->count - 1, &i) != NP_OK) {
 			fmt_print(reply, cap, "error %d $bbox dump: %u samples held",
 				  CONSOLE_E_EXTRA, (unsigned)b->count);
@@ -108,6 +115,7 @@ void bbox_console(vehicle_t *v, int argc, char **argv, char *reply, size_t cap)
 		bbox_csv_row(s, v->cfg.tick_hz,
 			     b->status == BBOX_FROZEN && s->tick == b->trigger ? b->fault : 0u,
 			     reply + n, cap - n);
+#endif
 	} else {
 		fmt_print(reply, cap, "error %d $bbox takes nothing, clear, header or dump INDEX",
 			  CONSOLE_E_EXTRA);

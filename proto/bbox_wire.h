@@ -23,6 +23,13 @@
 
 #include "../firmware/vehicle.h"
 
+/* A board leaves out the text form with its help text (VS_NO_HELP_TEXT,
+ * mk/cortexm.mk): its $bbox gives the status and clears; the samples go
+ * out in frames. */
+#ifdef VS_NO_HELP_TEXT
+#define VS_NO_BBOX_TEXT
+#endif
+
 #define WIRE_OP_BBOX	0x7C
 #define BBOX_REQ_LEN	3
 #define BBOX_HDR_LEN	20

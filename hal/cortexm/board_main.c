@@ -20,6 +20,11 @@
 
 static loop_hal_t plant;
 static vehicle_t unit;
+/* The black box in the M4's share of RAM (1 KiB): 8 samples, one every
+ * 250 ticks (4 Hz at 1 kHz, the last 2 s) and the fault's (docs/mcu.md). */
+#define BOARD_BBOX_SAMPLES 8u
+#define BOARD_BBOX_EVERY   250u
+static bbox_sample_t bbox_ring[BOARD_BBOX_SAMPLES];
 static vs_server_t srv; /* the console and the binary frames on the UART */
 static cfgkeep_t keep;	/* $config: the compiled-in base, the store's overlay */
 
@@ -58,6 +63,7 @@ static __attribute__((noinline)) uint32_t unit_init(void)
 		for (;;)
 			;
 	cfgkeep_attach(&keep, &unit);
+	vehicle_blackbox(&unit, bbox_ring, BOARD_BBOX_SAMPLES, BOARD_BBOX_EVERY);
 	/* A request walks a few queued waypoints of the corner speed planning,
 	 * the idle calls the rest, and a few trial lines of a line's plan each. */
 	vehicle_set_plan_budget(&unit, BOARD_PLAN_BUDGET);
