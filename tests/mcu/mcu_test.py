@@ -31,6 +31,7 @@ One line per case, "ok NAME" or "FAIL NAME: why"; last line
 
   /usr/bin/python3 tests/mcu/mcu_test.py BUILD
 """
+import csv
 import json
 import math
 import os
@@ -853,6 +854,37 @@ def c_vehiclectl_frames(b, vehiclectl):
     reset(b)
 
 
+def c_bbox(b, vehiclectl):
+    """The black box on the board (docs/mcu.md): 8 samples, one every 250
+    ticks; status and clear on the console, the samples in frames; empty
+    after a clear, then one sample per 250 ms of the unit's time."""
+    expect(b, "$bbox clear", "ok bbox armed")
+    expect(b, "$bbox", "ok bbox armed samples 0 of 8 every 250 tick_hz 1000 trigger 0 fault 0")
+    expect(b, "$bbox dump 0", "error 8 $bbox dump is not in this build: read it in frames")
+    with tempfile.TemporaryDirectory() as tmp:
+        path = os.path.join(tmp, "bbox.csv")
+        assert vctl(b, vehiclectl, "bbox", path) == (
+            0, "bbox armed: 0 samples, one every 250 ticks at 1000 Hz, fault 0 at tick 0")
+        with open(path) as f:
+            head = f.readline().strip()
+            assert head.startswith("time_s,cmd_x_mm,") and head.endswith(",tick,fault"), head
+            assert f.read() == ""
+        b.wait(1100)
+        rc, out = vctl(b, vehiclectl, "bbox", path)
+        assert rc == 0 and re.match(r"bbox armed: [45] samples, one every 250 ticks at 1000 Hz, "
+                                    r"fault 0 at tick 0$", out), out
+        with open(path) as f:
+            rows = list(csv.DictReader(f))
+        ticks = [int(r["tick"]) for r in rows]
+        assert all(b2 - a == 250 for a, b2 in zip(ticks, ticks[1:])), ticks
+        assert all(r["state"] == "25" and r["fault"] == "0" for r in rows), rows
+        b.wait(2000)
+        rc, out = vctl(b, vehiclectl, "bbox", path)
+        assert rc == 0 and out.startswith("bbox armed: 8 samples,"), out
+    b.write(b"\n")
+    b.drain()
+
+
 def c_tick_cost(b):
     c = b.costs()
     mean = c["tick_sum"] / c["ticks"]
@@ -1117,6 +1149,7 @@ def main():
                  [(c.__name__[2:], c, ()) for c in CONFORMANCE] +
                  [("link_watchdog", c_link_watchdog, ())] +
                  [("vehiclectl_frames", c_vehiclectl_frames, (vehiclectl,)),
+                  ("bbox", c_bbox, (vehiclectl,)),
                   ("jerk_moves", c_jerk_moves, ()),
                   ("tick_cost", c_tick_cost, ()),
                   ("request_costs", c_request_costs, ()),
