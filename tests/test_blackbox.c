@@ -519,6 +519,22 @@ static void console_reads_and_clears(void **state)
 	ex("$wait 0", "ok wait 0");
 }
 
+/* The example of docs/protocol.md "Black box", byte for byte. */
+static void documented_example(void **state)
+{
+	static const uint8_t req[] = {0xA5, 0x03, 0x00, 0x30, 0x7C, 0x00, 0x00, 0x00, 0xE5, 0x28};
+	static const uint8_t ans[] = {0xA5, 0x15, 0x00, 0x30, 0xFC, 0x00, 0x01, 0x00, 0x00, 0x00,
+				      0x00, 0x00, 0xD0, 0x07, 0x01, 0x00, 0xE8, 0x03, 0x00, 0x00,
+				      0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xC8, 0x41};
+
+	(void)state;
+	memcpy(P.in, req, sizeof(req));
+	P.in_len = sizeof(req);
+	server_poll(&U.srv, (uint32_t)U.now_us);
+	assert_int_equal(P.out_len, sizeof(ans));
+	assert_memory_equal(P.out, ans, sizeof(ans));
+}
+
 static int setup_every10(void **state)
 {
 	(void)state;
@@ -555,6 +571,7 @@ int main(void)
 	    cmocka_unit_test_setup_teardown(clear_empties_and_rearms, setup, teardown),
 	    cmocka_unit_test_setup_teardown(bad_requests_are_refused, setup, teardown),
 	    cmocka_unit_test_setup_teardown(console_reads_and_clears, setup, teardown),
+	    cmocka_unit_test_setup_teardown(documented_example, setup, teardown),
 	    cmocka_unit_test_setup_teardown(decimated_keeps_the_fault_tick, setup_every10,
 					    teardown),
 	};
