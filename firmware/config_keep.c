@@ -16,11 +16,16 @@ _Static_assert(CFGKEEP_PAYLOAD_MAX >= 4 + VS_CONFIG_NFIELDS * (1 + 24 + 3) +
 VS_CONFIG_FIELDS(ROW_IN_ROWS)
 #undef ROW_IN_ROWS
 
-/* The RESTART rows' bytes together (what commit sets aside). */
+/* The RESTART rows' bytes together (what commit sets aside): a char
+ * array a row, one byte more than the row's share (a C array has one). */
+struct restart_bytes {
 #define RESTART_ROW_BYTES(m, n, type, dflt, lo, hi, excl, when, ...)                               \
-	+(VS_CFG_WHEN_##when == VS_CFG_WHEN_RESTART ? sizeof(((vs_config_t *)0)->m) : 0u)
-enum { RESTART_BYTES = 0 VS_CONFIG_FIELDS(RESTART_ROW_BYTES) };
+	char m[1u +                                                                                \
+	       (VS_CFG_WHEN_##when == VS_CFG_WHEN_RESTART ? sizeof(((vs_config_t *)0)->m) : 0u)];
+	VS_CONFIG_FIELDS(RESTART_ROW_BYTES)
 #undef RESTART_ROW_BYTES
+};
+enum { RESTART_BYTES = sizeof(struct restart_bytes) - VS_CONFIG_NFIELDS };
 
 static uint32_t row_bytes(const vs_config_field_t *f)
 {

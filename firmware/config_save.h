@@ -28,9 +28,13 @@
 
 /* The largest saved form of this table (every element differs): what a
  * save needs at most. A record another table wrote may be larger. */
+struct vs_cfgsave_max_bytes { /* a char array an entry's bytes */
 #define VS_CFGSAVE_ROW_MAX(m, n, ...)                                                              \
-	+(n) * (4u + sizeof(#m) - 1u + sizeof(((vs_config_t *)0)->m) / (n))
-enum { VS_CFGSAVE_MAX = 4u VS_CONFIG_FIELDS(VS_CFGSAVE_ROW_MAX) };
+	char m[(n) * (4u + sizeof(#m) - 1u + sizeof(((vs_config_t *)0)->m) / (n))];
+	VS_CONFIG_FIELDS(VS_CFGSAVE_ROW_MAX)
+#undef VS_CFGSAVE_ROW_MAX
+};
+#define VS_CFGSAVE_MAX (4u + sizeof(struct vs_cfgsave_max_bytes))
 
 uint32_t vs_config_schema(void);
 /* Bytes of one element of a row's type (vs_config_type_t). */
