@@ -1,7 +1,9 @@
 /* Fuzz target: the binary frame decoder and the unit's frame server
  * (proto/frame.c, wire.c) on a unit on the simulated plant, with the
  * telemetry stream's subscription (proto/stream.c) as the serial server has
- * it: every stream frame due after a tick is encoded and read back.
+ * it: every stream frame due after a tick is encoded and read back; and the
+ * black box's readout (proto/bbox_wire.h) on a small ring recording every
+ * other tick: every answer decodes to its header and samples.
  *
  * Input: chunks, each a control byte (bits 0-5: chunk length, bits 6-7:
  * time since the previous chunk: 0, 1, 60 or 150 ms, so the inter-byte
@@ -15,6 +17,7 @@
 #include <string.h>
 
 #include "../../host_sim/sim.h"
+#include "../../proto/bbox_wire.h"
 #include "../../proto/frame.h"
 #include "../../proto/stream.h"
 
@@ -24,6 +27,7 @@ static frame_rx_t back; /* parses what the unit sent */
 static uint8_t back_buf[FRAME_RESP_MAX];
 static uint32_t back_frames;
 static stream_sub_t sub;
+static bbox_sample_t ring[12];
 
 static size_t on_stream(void *ctx, const uint8_t *p, size_t len, uint8_t *resp, int *st)
 {
@@ -63,6 +67,14 @@ static void on_back_frame(void *ctx, const frame_t *f)
 	if (f->status != WIRE_ST_OK || !(f->op & FRAME_RESP_FLAG) || f->len < 1 ||
 	    f->len > FRAME_RESP_PAYLOAD_MAX)
 		abort();
+	if (f->op == (FRAME_RESP_FLAG | WIRE_OP_BBOX) && f->len > 1) {
+		bbox_page_t pg;
+		bbox_sample_t smp[BBOX_PAGE];
+
+		if (!bbox_wire_decode(f->payload + 1, f->len - 1, &pg, smp) || pg.count > pg.cap ||
+		    pg.index + pg.n > pg.count)
+			abort();
+	}
 	back_frames++;
 }
 
@@ -98,6 +110,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	vs_config_defaults(&cfg);
 	if (sim_init(&S, &cfg, NULL) != 0)
 		abort();
+	vehicle_blackbox(&S.vehicle, ring, 12, 2);
 	frame_srv_init(&srv, &S.vehicle, on_write, NULL, on_other, NULL);
 	stream_sub_init(&sub, STREAM_BAUD);
 	frame_srv_set_stream(&srv, on_stream, NULL);
