@@ -98,7 +98,7 @@ struct vs_server {
 	uint32_t can_port_errors;			   /* receive errors the port reported */
 	uint32_t last_us, us_rem, now_ms;		   /* server_poll's millisecond clock */
 	void (*poll_can)(vs_server_t *s, uint32_t now_us); /* set by server_attach_can */
-	console_extra_fn main_extra; /* the main's extras, after $bbox */
+	console_extra_fn main_extra;			   /* the main's extras, after $bbox */
 	void *main_xctx;
 };
 
