@@ -22,7 +22,7 @@
 #include <unistd.h>
 
 #include "../firmware/config_keep.h"
-#include "../hal/posix/bboxfile.h"
+#include "../proto/client/bboxfile.h"
 #include "../hal/posix/config_xml.h"
 #include "../hal/posix/filestore.h"
 #include "../hal/posix/rt.h"

@@ -23,7 +23,7 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "../hal/posix/bboxfile.h"
+#include "../proto/client/bboxfile.h"
 #include "../proto/client/client.h"
 #include "../proto/cmdtab.h"
 #include "../proto/numparse.h"

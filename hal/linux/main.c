@@ -20,7 +20,7 @@
 #include <unistd.h>
 
 #include "../../firmware/config_keep.h"
-#include "../posix/bboxfile.h"
+#include "../../proto/client/bboxfile.h"
 #include "../posix/config_xml.h"
 #include "../posix/filestore.h"
 #include "backend_cfg.h"

@@ -4,7 +4,7 @@
 #include <errno.h>
 #include <stdio.h>
 
-#include "../../proto/bbox_wire.h"
+#include "../bbox_wire.h"
 
 static int write_rows(FILE *f, const bbox_sample_t *const *s, uint32_t n, uint32_t tick_hz,
 		      uint32_t trigger, uint32_t fault)
