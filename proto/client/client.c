@@ -162,7 +162,6 @@ static int bbox_request(vc_client_t *c, uint8_t action, uint16_t index, bbox_pag
 			bbox_sample_t *s)
 {
 	uint8_t req[BBOX_REQ_LEN] = {action, (uint8_t)(index & 0xFFu), (uint8_t)(index >> 8)};
-	bbox_sample_t scratch[BBOX_PAGE];
 	size_t n = 0;
 	int e;
 
@@ -171,7 +170,7 @@ static int bbox_request(vc_client_t *c, uint8_t action, uint16_t index, bbox_pag
 	e = exchange(c, WIRE_OP_BBOX, req, sizeof(req), &n);
 	if (e != VC_OK)
 		return e;
-	if (!bbox_wire_decode(c->resp, n, pg, s ? s : scratch) || pg->index != index)
+	if (!bbox_wire_decode(c->resp, n, pg, s) || pg->index != index)
 		return VC_E_PROTO;
 	return VC_OK;
 }
@@ -183,7 +182,9 @@ int vc_bbox_page(vc_client_t *c, uint16_t index, bbox_page_t *pg, bbox_sample_t 
 
 int vc_bbox_clear(vc_client_t *c, bbox_page_t *pg)
 {
-	return bbox_request(c, BBOX_CLEAR, 0, pg, NULL);
+	bbox_sample_t none[BBOX_PAGE]; /* a clear's answer has none */
+
+	return bbox_request(c, BBOX_CLEAR, 0, pg, none);
 }
 
 int vc_bbox_read(vc_client_t *c, bbox_sample_t *s, size_t cap, size_t *n, bbox_page_t *pg)
