@@ -12,10 +12,12 @@
 BENCH_DIR := $(BUILD)/bench
 BENCH_SECS := $(if $(filter 1,$(BENCH_QUICK)),5,60)
 BENCH_RIG := $(call objs,tools/bench/rig.c hal/cortexm/loop_hal.c)
-BENCH_PROGS := $(addprefix $(BENCH_DIR)/,tickcost accuracy parserate looplat plantbench)
+BENCH_PROGS := $(addprefix $(BENCH_DIR)/,tickcost accuracy parserate looplat plantbench streamcost)
 
 $(BENCH_DIR)/tickcost: $(call objs,tools/bench/tickcost.c tools/bench/scenario.c) $(BENCH_RIG) \
 	$(FW_LIB)
+$(BENCH_DIR)/streamcost: $(call objs,tools/bench/streamcost.c tools/bench/scenario.c) $(BENCH_RIG) \
+	$(PROTO_LIB) $(FW_LIB)
 $(BENCH_DIR)/looplat: $(call objs,tools/bench/looplat.c) $(BENCH_RIG) $(FW_LIB)
 $(BENCH_DIR)/accuracy: $(call objs,tools/bench/accuracy.c tools/ref/ref_motion.c) $(BENCH_RIG) \
 	$(FW_LIB)

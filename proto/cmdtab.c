@@ -125,6 +125,14 @@ const char *cmd_type_idl(char type)
 	}
 }
 
+/* Four bits at a time: the register's top nibble shifted out through the
+ * polynomial (entry i: i << 12 after four shifts). A fifth of the bitwise
+ * loop's instructions, for 32 bytes of table: every answer and stream
+ * frame is checked. */
+static const uint16_t crc_nibble[16] = {0x0000, 0x1021, 0x2042, 0x3063, 0x4084, 0x50A5,
+					0x60C6, 0x70E7, 0x8108, 0x9129, 0xA14A, 0xB16B,
+					0xC18C, 0xD1AD, 0xE1CE, 0xF1EF};
+
 uint16_t cmd_crc16(uint16_t crc, const void *data, size_t n)
 {
 	const uint8_t *p = data;
@@ -132,9 +140,8 @@ uint16_t cmd_crc16(uint16_t crc, const void *data, size_t n)
 
 	while (n--) {
 		c ^= (uint32_t)*p++ << 8;
-		for (int b = 0; b < 8; b++)
-			c = (c & 0x8000u) ? (c << 1) ^ 0x1021u : c << 1;
-		c &= 0xFFFFu;
+		c = ((c << 4) & 0xFFFFu) ^ crc_nibble[(c >> 12) & 0xFu];
+		c = ((c << 4) & 0xFFFFu) ^ crc_nibble[(c >> 12) & 0xFu];
 	}
 	return (uint16_t)c;
 }

@@ -273,6 +273,25 @@ static int64_t get_le(const uint8_t *p, unsigned type)
 
 /* ---- serial ---------------------------------------------------------------- */
 
+/* The table's rows in the serial order: by group, then as listed. */
+static uint8_t serial_order[sizeof(stream_fields) / sizeof(stream_fields[0])];
+static uint8_t group_start[STREAM_GROUPS + 1];
+
+static void order_init(void)
+{
+	unsigned k = 0;
+
+	if (group_start[STREAM_GROUPS])
+		return;
+	for (unsigned g = 0; g < STREAM_GROUPS; g++) {
+		group_start[g] = (uint8_t)k;
+		for (unsigned i = 0; i < stream_field_count; i++)
+			if (stream_fields[i].group == g)
+				serial_order[k++] = (uint8_t)i;
+	}
+	group_start[STREAM_GROUPS] = (uint8_t)k;
+}
+
 size_t stream_encode(const stream_sample_t *s, uint16_t mask, uint32_t tick, uint8_t *out,
 		     size_t cap)
 {
@@ -280,19 +299,18 @@ size_t stream_encode(const stream_sample_t *s, uint16_t mask, uint32_t tick, uin
 
 	if (cap < stream_payload_len(mask))
 		return 0;
+	order_init();
 	wire_put_u16(out, mask);
 	wire_put_u32(out + 2, tick);
 	for (unsigned g = 0; g < STREAM_GROUPS; g++) {
 		if (!(mask & (1u << g)))
 			continue;
-		for (unsigned i = 0; i < stream_field_count; i++) {
-			const stream_field_t *f = &stream_fields[i];
-			size_t k = stream_type_size(f->type);
+		for (unsigned k = group_start[g]; k < group_start[g + 1]; k++) {
+			const stream_field_t *f = &stream_fields[serial_order[k]];
+			size_t w = stream_type_size(f->type);
 
-			if (f->group != g)
-				continue;
-			put_le(out + n, stream_get(s, f), k);
-			n += k;
+			put_le(out + n, stream_get(s, f), w);
+			n += w;
 		}
 	}
 	return n;
@@ -310,14 +328,13 @@ int stream_decode(const uint8_t *p, size_t len, uint16_t *mask, uint32_t *tick, 
 		return -1;
 	*mask = m;
 	*tick = wire_get_u32(p + 2);
+	order_init();
 	for (unsigned g = 0; g < STREAM_GROUPS; g++) {
 		if (!(m & (1u << g)))
 			continue;
-		for (unsigned i = 0; i < stream_field_count; i++) {
-			const stream_field_t *f = &stream_fields[i];
+		for (unsigned k = group_start[g]; k < group_start[g + 1]; k++) {
+			const stream_field_t *f = &stream_fields[serial_order[k]];
 
-			if (f->group != g)
-				continue;
 			stream_set(s, f, get_le(p + n, f->type));
 			n += stream_type_size(f->type);
 		}
@@ -381,6 +398,7 @@ void stream_sub_init(stream_sub_t *ss, uint32_t baud)
 {
 	memset(ss, 0, sizeof(*ss));
 	ss->baud = baud ? baud : STREAM_BAUD;
+	order_init(); /* now, not in the first frame's period */
 }
 
 int stream_start(stream_sub_t *ss, uint32_t tick_hz, uint32_t now_tick, uint16_t mask,
