@@ -43,8 +43,9 @@ void vehicle_servo_off(vehicle_t *v);
 /* Read every drive once (vehicle_tick.c): what the tick does first. */
 void vehicle_sample_drives(vehicle_t *v);
 void vehicle_raise_fault(vehicle_t *v, uint32_t code, const char *text);
-/* The tick's black box sample (vehicle.c), when bbox_due. */
-void vehicle_bbox_record(vehicle_t *v);
+/* The state's getState code, its word and the alarm it names (NULL: none)
+ * (vehicle_tick.c: the black box records it every tick). */
+int16_t vehicle_state_of(const vehicle_t *v, const char **word, const vs_alarm_t **why);
 void vehicle_raise_fault_level(vehicle_t *v, uint32_t code, const char *text);
 
 #endif

@@ -554,6 +554,72 @@ bool vehicle_in_position(const vehicle_t *v)
 	       v->settle_ticks > v->settle_timeout_ticks;
 }
 
+/* The state's code, its word and the alarm it names (NULL: none). */
+int16_t vehicle_state_of(const vehicle_t *v, const char **word, const vs_alarm_t **why)
+{
+	const vs_alarm_t *fault = alarm_newest(&v->alarms, VS_ALARM_FAULT);
+	/* Braking for a lock, an obstacle or a pause, or settling, the unit is
+	 * Busy: the state that follows is reported once the wheels are in
+	 * place. */
+	bool settled = vehicle_servo_waiting(v) || vehicle_in_position(v);
+	*why = NULL;
+	if (fault) {
+		*why = fault;
+		*word = "Alarm";
+		return VS_STATE_ALARM;
+	}
+	if (!v->powered) {
+		*word = "Unpowered";
+		return VS_STATE_UNPOWERED;
+	}
+	if (settled && v->locked) {
+		*word = "Locked";
+		return VS_STATE_LOCKED;
+	}
+	if (settled && v->stuck) {
+		*word = "Stuck";
+		return VS_STATE_STUCK;
+	}
+	if (!v->servo) {
+		*word = "Powered";
+		return VS_STATE_POWERED;
+	}
+	if (settled && motion_is_paused(&v->motion)) {
+		*word = "Paused";
+		return VS_STATE_PAUSED;
+	}
+	if (!settled || vehicle_servo_waiting(v) || motion_has_work(&v->motion)) {
+		*word = "Busy";
+		return VS_STATE_BUSY;
+	}
+	*why = alarm_newest(&v->alarms, VS_ALARM_WARNING);
+	*word = *why ? "Warning" : "Ready";
+	return *why ? VS_STATE_WARNING : VS_STATE_READY;
+}
+
+/* The tick's sample for the black box (vehicle_tick, when one is due). */
+/* Out of line: make bench counts it apart (tools/bench/tickcost.sh). */
+static __attribute__((noinline)) void vehicle_bbox_record(vehicle_t *v)
+{
+	bbox_sample_t *s = bbox_slot(&v->bbox);
+	const char *word;
+	const vs_alarm_t *why;
+
+	s->ref = *motion_ref_pose(&v->motion);
+	s->odo = v->odom;
+	s->cmd = v->cmd;
+	for (unsigned i = 0; i < VS_MAX_AXES; i++) {
+		s->sp_q8[i] = v->wheel_cps_q8[i];
+		s->enc[i] = v->meas_counts[i];
+	}
+	s->tick = v->ticks;
+	s->newest_alarm = v->alarms.n ? v->alarms.a[0].code : 0u;
+	s->state = vehicle_state_of(v, &word, &why);
+	s->queue_len = motion_queue_len(&v->motion);
+	s->alarms = (uint8_t)v->alarms.n;
+	bbox_commit(&v->bbox);
+}
+
 void vehicle_tick(vehicle_t *v, uint32_t now_us)
 {
 	check_lateness(v, now_us);

@@ -16,9 +16,9 @@ static void get_sample(const uint8_t *p, bbox_sample_t *s)
 	q32_t *q[9] = {&s->ref.x_mm,   &s->ref.y_mm,  &s->ref.th_deg, &s->odo.x_mm, &s->odo.y_mm,
 		       &s->odo.th_deg, &s->cmd.vx_pt, &s->cmd.vy_pt,  &s->cmd.w_pt};
 
-	for (unsigned i = 0; i < 9; i++)
+	for (size_t i = 0; i < 9; i++)
 		*q[i] = get_i64(p + 8 * i);
-	for (unsigned i = 0; i < VS_MAX_AXES; i++) {
+	for (size_t i = 0; i < VS_MAX_AXES; i++) {
 		s->sp_q8[i] = (int32_t)wire_get_u32(p + 72 + 4 * i);
 		s->enc[i] = (int32_t)wire_get_u32(p + 88 + 4 * i);
 	}

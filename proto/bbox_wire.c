@@ -21,9 +21,9 @@ static void put_sample(uint8_t *p, const bbox_sample_t *s)
 	const q32_t q[9] = {s->ref.x_mm,   s->ref.y_mm,	 s->ref.th_deg, s->odo.x_mm, s->odo.y_mm,
 			    s->odo.th_deg, s->cmd.vx_pt, s->cmd.vy_pt,	s->cmd.w_pt};
 
-	for (unsigned i = 0; i < 9; i++)
+	for (size_t i = 0; i < 9; i++)
 		put_i64(p + 8 * i, q[i]);
-	for (unsigned i = 0; i < VS_MAX_AXES; i++) {
+	for (size_t i = 0; i < VS_MAX_AXES; i++) {
 		wire_put_u32(p + 72 + 4 * i, (uint32_t)s->sp_q8[i]);
 		wire_put_u32(p + 88 + 4 * i, (uint32_t)s->enc[i]);
 	}

@@ -324,7 +324,9 @@ static char *trace_line(uint32_t k, char *buf, size_t cap)
 		p = p ? p + 1 : NULL;
 	}
 	assert_non_null(p);
-	size_t len = (size_t)(strchr(p, '\n') - p);
+	const char *end = strchr(p, '\n');
+	assert_non_null(end);
+	size_t len = (size_t)(end - p);
 	assert_true(len < cap);
 	memcpy(buf, p, len);
 	buf[len] = '\0';

@@ -25,7 +25,7 @@ static inline int bbox_file_write_ring(const char *path, const blackbox_t *b, ui
 		errno = EAGAIN;
 		return -1;
 	}
-	s = malloc(((size_t)b->count + 1u) * sizeof(*s));
+	s = malloc(((size_t)b->count + 1u) * sizeof(const bbox_sample_t *));
 	if (!s)
 		return -1;
 	for (uint16_t i = 0; i < b->count; i++)

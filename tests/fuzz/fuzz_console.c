@@ -21,6 +21,7 @@
 #define WAIT_CAP_MS 20
 
 static sim_t S;
+static bbox_sample_t bbox_ring[6];
 static server_serial_t SER;
 static console_extra_fn next_extra; /* the server's chain: $stream, $link, the simulator's */
 static void *next_xctx;
@@ -96,6 +97,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	vs_config_defaults(&cfg);
 	if (sim_init(&S, &cfg, NULL) != 0)
 		abort();
+	/* $bbox dump has samples to index (a few, every tick of $wait) */
+	vehicle_blackbox(&S.vehicle, bbox_ring, 6, 1);
 	{
 		const vs_link_t io = {no_read, sink, NULL};
 
