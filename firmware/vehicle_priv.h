@@ -46,6 +46,9 @@ void vehicle_raise_fault(vehicle_t *v, uint32_t code, const char *text);
 /* The state's getState code, its word and the alarm it names (NULL: none)
  * (vehicle_tick.c: the black box records it every tick). */
 int16_t vehicle_state_of(const vehicle_t *v, const char **word, const vs_alarm_t **why);
+/* The tick's black box sample (vehicle_tick.c), when bbox_due; global so
+ * that make bench counts it by name. */
+void vehicle_bbox_record(vehicle_t *v);
 void vehicle_raise_fault_level(vehicle_t *v, uint32_t code, const char *text);
 
 #endif

@@ -599,7 +599,7 @@ int16_t vehicle_state_of(const vehicle_t *v, const char **word, const vs_alarm_t
 
 /* The tick's sample for the black box (vehicle_tick, when one is due). */
 /* Out of line: make bench counts it apart (tools/bench/tickcost.sh). */
-static __attribute__((noinline)) void vehicle_bbox_record(vehicle_t *v)
+__attribute__((noinline)) void vehicle_bbox_record(vehicle_t *v)
 {
 	bbox_sample_t *s = bbox_slot(&v->bbox);
 	const char *word;
