@@ -89,6 +89,7 @@ void cfgkeep_load(cfgkeep_t *k, const vs_config_t *base, const hal_store_t *stor
 	k->v = NULL;
 	k->store = store;
 	k->boot = (cfgkeep_boot_t){0};
+	(void)vs_config_schema(); /* worked out now, not in a request */
 	rows_copy(&k->base, base);
 	*start = *base;
 	if (store) {
