@@ -69,10 +69,12 @@ usr/local/bin/vehicle-plot 755
 usr/local/bin/vehicle-sim 755
 usr/local/bin/vehiclectl 755
 $py/__init__.py 644
+$py/bbox.py 644
 $py/client.py 644
 $py/errors.py 644
 $py/ops.py 644
 $py/plot.py 644
+$py/stream.py 644
 $py/transport.py 644
 usr/local/lib/systemd/system/vehicle-fw.service 644
 usr/local/share/vehicle/examples/io.xml 644
