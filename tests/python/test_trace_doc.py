@@ -1,5 +1,6 @@
-"""docs/trace.md names the columns of vehicle-sim --trace, in order, and
-vehicle-sim --help points there."""
+"""docs/trace.md names the columns of vehicle-sim --trace and of vehiclectl
+record (over the stream, and polled), in order, and vehicle-sim --help
+points there."""
 import os
 import re
 import subprocess
@@ -43,9 +44,14 @@ class TraceDoc(unittest.TestCase):
     def test_record_columns_are_documented_in_order(self):
         with open(os.path.join(TOP, "tools/vehiclectl_main.c")) as f:
             src = f.read()
-        m = re.search(r'fprintf\(csv, "(t_s,[^"]*)"\s*"([^"]*)\\n"\);', src)
-        self.assertIsNotNone(m)
-        self.assertEqual(documented("`vehiclectl record"), (m[1] + m[2]).split(","))
+        # each header: fprintf(csv, "t_s,..." "..." "...\n"), adjacent literals joined
+        heads = [re.sub(r'"\s*"', "", m[1]).split(",") for m in
+                 re.finditer(r'fprintf\(csv, "(t_s,(?:[^"]|"\s*")*)\\n"\);', src)]
+        self.assertEqual(len(heads), 2)
+        stream_cols = [h for h in heads if "tick" in h][0]
+        poll_cols = [h for h in heads if "tick" not in h][0]
+        # the stream's table first (binary frames), then the polled one
+        self.assertEqual(documented("`vehiclectl record"), stream_cols + poll_cols)
 
     def test_help_points_to_the_page(self):
         out = subprocess.run([os.path.join(BUILD, "vehicle-sim"), "--help"], check=True,
