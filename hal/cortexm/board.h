@@ -40,6 +40,9 @@ uint32_t systick_count(void);
  * counter's position in the current one): the cost of a piece of code is
  * the difference of two readings. */
 uint32_t systick_cycles(void);
+/* Microseconds since systick_init, modulo 2^32 (whole periods and the
+ * counter's position): a clock whose differences hold across its wrap. */
+uint32_t systick_us(void);
 void SysTick_Handler(void);
 
 #endif

@@ -1,6 +1,7 @@
-/* The vehicle unit on a Cortex-M board: reference configuration, loopback
- * plant (loop_hal.h) behind the HAL, console and binary frames on the UART,
- * one vehicle_tick per SysTick period.
+/* The vehicle unit on a Cortex-M board: reference configuration, the plant
+ * of plant.h behind the HAL (Modbus drives, or the loopback), console and
+ * binary frames on the UART, one vehicle_tick per SysTick period, the
+ * watchdog fed after each.
  *
  * Between ticks the main loop serves the link and drains the UART. A
  * period that passes while the previous tick or a command still runs is
@@ -11,14 +12,14 @@
 #include "firmware/config_keep.h"
 #include "firmware/vehicle.h"
 #include "flashstore.h"
-#include "loop_hal.h"
+#include "plant.h"
+#include "wdog.h"
 #include "proto/server.h"
 
 #ifdef BOARD_STORE_CUT
 #include <string.h>
 #endif
 
-static loop_hal_t plant;
 static vehicle_t unit;
 /* The black box in the M4's share of RAM (1 KiB): 8 samples, one every
  * 250 ticks (4 Hz at 1 kHz, the last 2 s) and the fault's (docs/mcu.md). */
@@ -45,7 +46,7 @@ volatile board_cost_t board_cost;
 static __attribute__((noinline)) uint32_t unit_init(void)
 {
 	vs_config_t cfg;
-	vs_hal_t hal = {&loop_hal_ops, &plant};
+	vs_hal_t hal;
 	vs_config_defaults(&cfg);
 	cfg.has_joystick = false;
 #if VS_KIN_ONLY == 1 /* VS_KIN_OMNI: the preprocessor sees no enum */
@@ -53,17 +54,16 @@ static __attribute__((noinline)) uint32_t unit_init(void)
 	cfg.kinematics = VS_KIN_OMNI;
 	cfg.wheel_base_mm = VS_REAL(400.0);
 #endif
-	/* The loopback's drives follow their setpoints at once. */
-	for (unsigned i = 0; i < VS_MAX_AXES; i++)
-		cfg.drive_lag_ms[i] = 0;
+	plant_config(&cfg);
 	/* The compiled-in configuration is the base; the store's goes over. */
 	cfgkeep_load(&keep, &cfg, &flashstore, &cfg);
-	loop_hal_init(&plant, cfg.tick_hz);
+	hal = plant_hal(&cfg);
 	if (vehicle_init(&unit, &cfg, &hal, NULL) != 0)
 		for (;;)
 			;
 	cfgkeep_attach(&keep, &unit);
 	vehicle_blackbox(&unit, bbox_ring, BOARD_BBOX_SAMPLES, BOARD_BBOX_EVERY);
+	plant_start(&unit);
 	/* A request walks a few queued waypoints of the corner speed planning,
 	 * the idle calls the rest, and a few trial lines of a line's plan each. */
 	vehicle_set_plan_budget(&unit, BOARD_PLAN_BUDGET);
@@ -112,7 +112,7 @@ static bool store_cut(void *ctx, int argc, char **argv, char *reply, size_t cap)
 }
 #define BOARD_EXTRA store_cut
 #else
-#define BOARD_EXTRA NULL
+#define BOARD_EXTRA plant_extra
 #endif
 
 int main(void)
@@ -123,6 +123,9 @@ int main(void)
 	console_set_keep(&srv.con, &keep);
 	server_attach_serial(&srv, &uart_link);
 	systick_init(tick_hz);
+#ifndef BOARD_STORE_CUT /* its cut stops the board as a power cut would */
+	wdog_start();
+#endif
 
 	uint32_t done = systick_count();
 	uint32_t period_us = 1000000u / tick_hz;
@@ -142,7 +145,7 @@ int main(void)
 				board_cost.tick_worst = c;
 			/* The tick's own cost over a period is fault 209. */
 			vehicle_tick_busy(&unit, c / (BOARD_CPU_HZ / 1000000u));
-			loop_hal_step(&plant);
+			plant_tick();
 			continue;
 		}
 		r = serve_link(done, done * period_us / 1000u, seen, &c);
@@ -162,6 +165,7 @@ int main(void)
 					board_cost.plan_worst = c;
 			}
 		}
+		plant_poll();
 		uart_poll_tx();
 	}
 }

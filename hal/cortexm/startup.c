@@ -11,6 +11,7 @@ int main(void);
 void Reset_Handler(void);
 void Default_Handler(void);
 void HardFault_Handler(void);
+void NMI_Handler(void);
 
 void Reset_Handler(void)
 {
@@ -36,13 +37,10 @@ void Default_Handler(void)
 		;
 }
 
-void HardFault_Handler(void)
-{
-	for (;;)
-		;
-}
-
+/* wdog.c's handlers take the drives off and reset the board; an image
+ * without them stops here. */
 void NMI_Handler(void) __attribute__((weak, alias("Default_Handler")));
+void HardFault_Handler(void) __attribute__((weak, alias("Default_Handler")));
 void SVC_Handler(void) __attribute__((weak, alias("Default_Handler")));
 void PendSV_Handler(void) __attribute__((weak, alias("Default_Handler")));
 

@@ -9,6 +9,8 @@
 #define SCB_ICSR       (*(volatile uint32_t *)0xE000ED04u)
 #define ICSR_PENDSTSET (1u << 26)
 
+#define CYCLES_PER_US (BOARD_CPU_HZ / 1000000u)
+
 static volatile uint32_t periods;
 static uint32_t period_cycles;
 
@@ -40,6 +42,20 @@ uint32_t systick_cycles(void)
 	}
 	__asm volatile("msr primask, %0" ::"r"(primask) : "memory");
 	return p * period_cycles + (period_cycles - 1u - v);
+}
+
+uint32_t systick_us(void)
+{
+	uint32_t primask, p, v;
+	__asm volatile("mrs %0, primask\n\tcpsid i" : "=r"(primask)::"memory");
+	p = periods;
+	v = SYST_CVR;
+	if (SCB_ICSR & ICSR_PENDSTSET) {
+		p++;
+		v = SYST_CVR;
+	}
+	__asm volatile("msr primask, %0" ::"r"(primask) : "memory");
+	return p * (period_cycles / CYCLES_PER_US) + (period_cycles - 1u - v) / CYCLES_PER_US;
 }
 
 void SysTick_Handler(void)

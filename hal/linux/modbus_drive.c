@@ -7,6 +7,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "../modbus/mbmaster.h"
 #include "../modbus/mbprofile.h"
 #include "../posix/rt.h"
 
@@ -23,11 +24,8 @@ static uint64_t mono_us(void)
 
 uint32_t mb_byte_timeout_us(uint32_t baud, char parity, uint32_t stop_bits)
 {
-	uint32_t bits = 1 + 8 + (parity == 'N' ? 0 : 1) + stop_bits;
-	uint32_t us = (uint32_t)(4ull * bits * 1000000u / (baud ? baud : 1));
-	/* A host's serial driver and a USB adapter deliver a reply in pieces
-	 * some milliseconds apart: below that a good reply would be cut. */
-	return us < 5000u ? 5000u : us;
+	/* the board's master's rule (hal/modbus/mbmaster.c) */
+	return mbm_byte_us(baud, 1 + 8 + (parity == 'N' ? 0 : 1) + stop_bits);
 }
 
 int mb_bus_open(mb_bus_t *b, const bk_modbus_bus_t *cfg, char *err, size_t errlen)

@@ -19,6 +19,16 @@ uint16_t mbm_crc(const uint8_t *b, size_t n)
 	return crc;
 }
 
+uint32_t mbm_byte_us(uint32_t baud, uint32_t frame_bits)
+{
+	uint32_t us = (uint32_t)(4ull * frame_bits * 1000000u / (baud ? baud : 1));
+	/* A host's serial driver and a USB adapter deliver a reply in pieces
+	 * some milliseconds apart, and so does an emulated board's UART (a
+	 * byte per pass of the emulator's I/O loop): below that a good reply
+	 * would be cut. */
+	return us < MBM_BYTE_MIN_US ? MBM_BYTE_MIN_US : us;
+}
+
 void mbm_init(mbm_t *m, const mbm_port_t *port, uint32_t baud, uint32_t frame_bits,
 	      uint32_t timeout_us, uint8_t retries, uint32_t now_us)
 {
@@ -27,7 +37,7 @@ void mbm_init(mbm_t *m, const mbm_port_t *port, uint32_t baud, uint32_t frame_bi
 	m->port = port;
 	/* Above 19200 baud the standard fixes the gap at 1750 us. */
 	m->gap_us = baud > 19200u ? 1750u : (7u * ch + 1u) / 2u;
-	m->byte_us = 4u * ch < 1000u ? 1000u : 4u * ch;
+	m->byte_us = mbm_byte_us(baud, frame_bits);
 	m->timeout_us = timeout_us;
 	m->retries = retries;
 	m->t_line = now_us;
@@ -72,6 +82,7 @@ static bool start(mbm_t *m, size_t len)
 	m->unit = m->tx[0];
 	m->fc = m->tx[1];
 	m->attempt = 0;
+	m->quiet_us = m->gap_us;
 	m->state = ST_GAP;
 	return true;
 }
@@ -164,7 +175,10 @@ static uint8_t end_attempt(mbm_t *m, uint8_t r)
 	}
 	m->attempt++;
 	c->retries++;
-	m->state = ST_GAP; /* after the gap: a late answer is dropped there */
+	/* after the line has been silent for the byte timeout: the rest of a
+	 * late or cut answer is read and dropped meanwhile */
+	m->quiet_us = m->byte_us;
+	m->state = ST_GAP;
 	return MBM_BUSY;
 }
 
@@ -199,7 +213,7 @@ uint8_t mbm_poll(mbm_t *m, uint32_t now_us)
 		 * the line must then be silent for the gap again. */
 		if (p->read(p->ctx, m->rx, MBM_ADU_MAX))
 			m->t_line = now_us;
-		else if (m->state == ST_GAP && now_us - m->t_line >= m->gap_us) {
+		else if (m->state == ST_GAP && now_us - m->t_line >= m->quiet_us) {
 			p->de(p->ctx, true);
 			p->write(p->ctx, m->tx, m->txn);
 			m->cnt.requests++;
@@ -244,8 +258,7 @@ const char *mbd_check(const mb_profile_t *p, unsigned ndrives, uint32_t baud, ui
 	if (baud < 1200u || baud > 1000000u)
 		return "baud: 1200 to 1000000";
 	uint32_t cycle = mbd_cycle_us(p, ndrives, baud, frame_bits, MBD_TURNAROUND_US);
-	uint64_t worst = (uint64_t)cycle + (uint64_t)timeout_us * (1u + retries);
-	if (2u * worst > (uint64_t)drive_timeout_ms * 1000u)
+	if (!MBD_LINE_OK(cycle, timeout_us, retries, drive_timeout_ms))
 		return "the line does not carry the drive cycle: a cycle and a failed request "
 		       "must fit twice in drive_timeout_ms";
 	return NULL;
@@ -459,28 +472,31 @@ void mbd_poll(mbd_bus_t *b, uint32_t now_us)
 	}
 }
 
-void mbd_set_velocity(mbd_bus_t *b, unsigned i, int32_t cps_q8)
+void mbd_set_velocity(void *ctx, uint8_t axis, int32_t cps_q8)
 {
+	mbd_drive_t *d = &((mbd_bus_t *)ctx)->d[axis];
 	/* counts/s, rounded to nearest */
 	int32_t cps = (int32_t)(((int64_t)cps_q8 + (cps_q8 >= 0 ? 128 : -128)) / 256);
-	b->d[i].cmd_cps = b->d[i].reverse ? -cps : cps; /* within +-2^23 */
+	d->cmd_cps = d->reverse ? -cps : cps; /* within +-2^23 */
 }
 
-void mbd_enable(mbd_bus_t *b, unsigned i, bool on)
+void mbd_enable(void *ctx, uint8_t axis, bool on)
 {
-	b->d[i].cmd_enable = on;
+	mbd_drive_t *d = &((mbd_bus_t *)ctx)->d[axis];
+	d->cmd_enable = on;
 	if (!on)
-		b->d[i].cmd_cps = 0;
+		d->cmd_cps = 0;
 }
 
-void mbd_reset_fault(mbd_bus_t *b, unsigned i)
+void mbd_reset_fault(void *ctx, uint8_t axis)
 {
-	b->d[i].reset_req++;
+	((mbd_bus_t *)ctx)->d[axis].reset_req++;
 }
 
-void mbd_read(mbd_bus_t *b, unsigned i, hal_drive_state_t *st)
+void mbd_read(void *ctx, uint8_t axis, hal_drive_state_t *st)
 {
-	mbd_drive_t *d = &b->d[i];
+	mbd_bus_t *b = ctx;
+	mbd_drive_t *d = &b->d[axis];
 	st->position_counts = d->reverse ? (int32_t)(0u - (uint32_t)d->pos) : d->pos;
 	st->fault_code = d->alarm;
 	st->enabled = mbp_enabled(b->prof, d->status);

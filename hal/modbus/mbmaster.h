@@ -13,7 +13,7 @@
  *    timeout, a reply that stops for byte_us is cut. Address, function,
  *    byte count, the echo of a write and the CRC are checked; an exception
  *    reply gives its code. A failed attempt is retried (retries times)
- *    after the line has been silent for the gap again (a late answer is
+ *    after the line has been silent for the byte timeout (a late answer is
  *    read and dropped, never paired with the next request); exceptions 1
  *    and 2 (illegal function, illegal address) are not retried: the answer
  *    will not change.
@@ -76,8 +76,10 @@ typedef struct {
 } mbm_count_t;
 
 typedef struct {
+	mbm_count_t cnt; /* first: a monitor reads it at the struct's address */
 	const mbm_port_t *port;
 	uint32_t gap_us, timeout_us, byte_us;
+	uint32_t quiet_us; /* silence before the next attempt: gap, or byte_us after a failure */
 	uint8_t retries;
 	uint8_t state, attempt, result, exc;
 	/* the request, for checking its reply */
@@ -85,7 +87,6 @@ typedef struct {
 	uint16_t addr;
 	uint8_t txn, rxn;
 	uint32_t t_line; /* last byte on the line, or the start of the wait */
-	mbm_count_t cnt;
 	uint8_t tx[MBM_ADU_MAX];
 	uint8_t rx[MBM_ADU_MAX];
 } mbm_t;
@@ -94,9 +95,12 @@ typedef struct {
 uint32_t mbm_char_us(uint32_t baud, uint32_t frame_bits);
 /* CRC-16 of Modbus (poly 0xA001 reflected, init 0xFFFF). */
 uint16_t mbm_crc(const uint8_t *b, size_t n);
+/* A reply's bytes at most that far apart: 4 characters, at least
+ * MBM_BYTE_MIN_US (vehicle-fw's rule too, hal/linux/modbus_drive.c). */
+#define MBM_BYTE_MIN_US 5000u
+uint32_t mbm_byte_us(uint32_t baud, uint32_t frame_bits);
 /* gap: 3.5 characters (1750 us above 19200 baud, as the standard says);
- * byte_us: a reply's bytes at most that far apart (4 characters, at least
- * 1 ms). The line is taken as silent since now. */
+ * byte_us: mbm_byte_us. The line is taken as silent since now. */
 void mbm_init(mbm_t *m, const mbm_port_t *port, uint32_t baud, uint32_t frame_bits,
 	      uint32_t timeout_us, uint8_t retries, uint32_t now_us);
 /* Starts a request (only when none is under way: false otherwise). Read:
@@ -141,6 +145,9 @@ typedef struct {
 } mbd_drive_t;
 
 typedef struct {
+	/* first, for a monitor (tests/mcu/mcu_drives.py): the drive cycle's
+	 * last and worst period, how many, when the current one began */
+	uint32_t cycle_us, cycle_worst_us, cycles, cycle_start;
 	mbm_t m;
 	const mb_profile_t *prof;
 	uint32_t comm_timeout_ms; /* 0: the drives' own stop is not set */
@@ -149,7 +156,6 @@ typedef struct {
 	uint8_t nrd;	  /* reads of the sample under way */
 	mbp_read_t rd[3]; /* the current drive's sample reads */
 	uint16_t val[MBP_REG_COUNT][2];
-	uint32_t cycle_start, cycle_us, cycle_worst_us, cycles;
 } mbd_bus_t;
 
 /* The drive cycle when every drive answers, us: each drive's speed write
@@ -157,6 +163,21 @@ typedef struct {
  * and turnaround_us for the drive to start its answer. */
 uint32_t mbd_cycle_us(const mb_profile_t *p, unsigned ndrives, uint32_t baud, uint32_t frame_bits,
 		      uint32_t turnaround_us);
+/* The same at compile time, for a board whose drives all take the same
+ * requests: half-characters and requests per drive (the generic profile:
+ * a 16 write of 13 bytes and its 8, a 03 read of 8 and its 13, each with
+ * the 3.5-character gap: MBD_GENERIC_HALFCHARS, MBD_GENERIC_REQUESTS). */
+#define MBD_CYCLE_US(nd, half, reqs, baud, bits, turn_us)                                          \
+	((uint32_t)(((uint64_t)(nd) * (half) * (bits)*1000000u + 2u * (baud)-1u) /                 \
+		    (2u * (baud))) +                                                               \
+	 (nd) * (reqs) * (turn_us))
+#define MBD_GENERIC_HALFCHARS 98u
+#define MBD_GENERIC_REQUESTS  2u
+/* The rule of mbd_check: one cycle and a request that fails with every
+ * retry fit within the drive timeout twice over. */
+#define MBD_LINE_OK(cycle_us, timeout_us, retries, drive_timeout_ms)                               \
+	(2u * ((uint64_t)(cycle_us) + (uint64_t)(timeout_us) * (1u + (retries))) <=                \
+	 (uint64_t)(drive_timeout_ms)*1000u)
 /* NULL when the line carries the cycle: one cycle and a request that fails
  * with every retry fit within the firmware's drive timeout twice over;
  * else why not. */
@@ -169,11 +190,12 @@ unsigned mbd_add(mbd_bus_t *b, uint8_t unit, uint8_t ch, bool reverse);
 /* Advances the cycle; call between ticks as often as the loop can. */
 void mbd_poll(mbd_bus_t *b, uint32_t now_us);
 
-/* The tick's side (vs_hal_ops_t, as hal/linux/modbus_drive.c). */
-void mbd_set_velocity(mbd_bus_t *b, unsigned i, int32_t cps_q8);
-void mbd_enable(mbd_bus_t *b, unsigned i, bool on);
-void mbd_reset_fault(mbd_bus_t *b, unsigned i);
-void mbd_read(mbd_bus_t *b, unsigned i, hal_drive_state_t *st);
+/* The tick's side, as hal/linux/modbus_drive.c: vs_hal_ops_t's drive
+ * calls on ctx, an mbd_bus_t (axis: the drive's index, below nd). */
+void mbd_set_velocity(void *ctx, uint8_t axis, int32_t cps_q8);
+void mbd_enable(void *ctx, uint8_t axis, bool on);
+void mbd_reset_fault(void *ctx, uint8_t axis);
+void mbd_read(void *ctx, uint8_t axis, hal_drive_state_t *st);
 
 /* A frame writing enable_off to drive i, for a fault handler that sends it
  * by polling the UART; its length. */
