@@ -102,7 +102,11 @@ typedef struct {
 	q32_t arc_kx, arc_ky; /* ARC: body velocity per unit rotation rate (mm/deg) */
 	q32_t omni_k;	      /* LINE (omni): mm per degree of heading change */
 	q32_t h;	      /* CORNER: heading change at s */
-	traj_corner_t corner;
+	/* CORNER: the head command's, not a copy (its entry is the dearest
+	 * tick of a cruise). The head stays queued until the corner ends, and
+	 * nothing changes a running corner's shape (a new acceleration only
+	 * its caps, which the piece does not read). */
+	const traj_corner_t *corner;
 } seg_t;
 
 enum {

@@ -218,7 +218,7 @@ static inline q32_t piece_limit(const seg_t *g, q32_t t, q32_t r)
 		}
 		return t;
 	case SEG_CORNER:
-		return fx_min64(t, fx_mul(r, g->corner.k_mm_deg) / 2);
+		return fx_min64(t, fx_mul(r, g->corner->k_mm_deg) / 2);
 	default:
 		return t;
 	}

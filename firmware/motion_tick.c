@@ -101,7 +101,7 @@ static void corner_piece(motion_t *m, const motion_cmd_t *c)
 	g->s = 0;
 	g->p0 = m->ref;
 	g->h = 0;
-	g->corner = c->corner;
+	g->corner = &c->corner;
 	g->len = 2 * c->corner.lh_mm;
 	g->p_end.x_mm = c->exit_x_mm;
 	g->p_end.y_mm = c->exit_y_mm;
@@ -191,19 +191,19 @@ static void piece_advance(motion_t *m, q32_t s)
 		 * mean of the ends minus h'' ds^2 / 8: one evaluation a step. The
 		 * step starts at the progress g->s, whose heading is g->h. */
 		q32_t ds = s - s_old;
-		q32_t lh = g->corner.lh_mm;
-		q32_t h1 = traj_corner_heading(&g->corner, s);
+		q32_t lh = g->corner->lh_mm;
+		q32_t h1 = traj_corner_heading(g->corner, s);
 		q32_t hm;
 		if (s_old == 0 && s <= lh) {
 			/* The step in from the line: h(s / 2) = h1 / 4 exactly. */
 			hm = h1 / 4;
 		} else if (s <= lh || s_old >= lh) {
-			int64_t du = traj_corner_u(&g->corner, ds); /* ds / Lh, Q30 */
+			int64_t du = traj_corner_u(g->corner, ds); /* ds / Lh, Q30 */
 			int32_t du2 = (int32_t)((du * du) >> 30);
-			q32_t corr = fx_mul_q30(g->corner.phi_deg, du2) / 8;
+			q32_t corr = fx_mul_q30(g->corner->phi_deg, du2) / 8;
 			hm = (g->h + h1) / 2 + (s <= lh ? -corr : corr);
 		} else {
-			hm = traj_corner_heading(&g->corner, s_old + ds / 2);
+			hm = traj_corner_heading(g->corner, s_old + ds / 2);
 		}
 		g->h = h1;
 		int32_t sn, cs;

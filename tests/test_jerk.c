@@ -1095,7 +1095,7 @@ static void test_stop_in_held_corner(void **state)
 	assert_true(r.m.hold_on);
 	/* The corner's braking jerk: the translation's, or the rotation's
 	 * over its mm per degree, half of it (motion_path.c, piece_limit). */
-	q32_t jb = fx_min64(r.m.jmax_t_pt3, fx_mul(r.m.jmax_r_pt3, r.m.seg.corner.k_mm_deg) / 2);
+	q32_t jb = fx_min64(r.m.jmax_t_pt3, fx_mul(r.m.jmax_r_pt3, r.m.seg.corner->k_mm_deg) / 2);
 	motion_stop(&r.m);
 	jrig_reset_peaks(&r);
 	jrig_tick(&r);

@@ -36,10 +36,11 @@ static void l_read(void *ctx, uint8_t axis, hal_drive_state_t *st)
 	loop_hal_t *h = ctx;
 	if (axis >= LOOP_HAL_AXES)
 		return;
-	st->position_counts = h->counts[axis];
-	st->fault_code = 0;
-	st->enabled = h->enabled[axis] && h->relay;
-	st->fresh = true;
+	/* The whole report in one store: its flags are bit-fields, each a
+	 * read-modify-write of its own (the tick pays it per wheel). */
+	*st = (hal_drive_state_t){.position_counts = h->counts[axis],
+				  .enabled = h->enabled[axis] && h->relay,
+				  .fresh = true};
 }
 
 static void l_reset_fault(void *ctx, uint8_t axis)
