@@ -376,7 +376,7 @@ static const uint8_t sample_regs[3] = {MBP_POSITION, MBP_STATUS, MBP_ALARM};
 
 unsigned mbp_read_plan(const mb_profile_t *p, unsigned ch, unsigned max, mbp_read_t rd[3])
 {
-	mbp_read_t it[3];
+	mbp_read_t it[3] = {{0}}; /* cppcheck cannot follow the insertion sort */
 	unsigned n = 0, out = 0;
 	unsigned block = p->block < max ? p->block : max;
 	for (unsigned k = 0; k < 3; k++) {
