@@ -414,7 +414,7 @@ static void test_bus_silent_and_exceptions(void **state)
 	assert_false(b.d[0].silent);
 	/* the map rejected: not retried, why map */
 	t = exchange(&b, t, SP0, sizeof SP0, SP_ECHO, sizeof SP_ECHO);
-	t = exchange(&b, t, RD, sizeof RD, EXC2, sizeof EXC2);
+	(void)exchange(&b, t, RD, sizeof RD, EXC2, sizeof EXC2);
 	mbd_read(&b, 0, &st);
 	assert_int_equal(st.silent_why, HAL_SILENT_MAP);
 	assert_int_equal(b.d[0].failures, 3 + 1);
