@@ -292,8 +292,10 @@ static inline __attribute__((always_inline)) bool sample_drive(vehicle_t *v, uin
  * being 2 or 4 by the kinematics); servo on calls it out of line. */
 static inline __attribute__((always_inline)) bool sample_drives(vehicle_t *v)
 {
-	if (!vs_config_omni(&v->cfg))
-		return sample_drive(v, 0) & sample_drive(v, 1);
+	if (!vs_config_omni(&v->cfg)) {
+		bool on0 = sample_drive(v, 0); /* both read, whatever drive 0 says */
+		return sample_drive(v, 1) && on0;
+	}
 	bool all_on = true;
 	for (uint8_t i = 0; i < 4; i++)
 		all_on &= sample_drive(v, i);
