@@ -35,7 +35,7 @@ LINT_TEST_SRC := $(filter-out tests/qemu/uinput_probe.c,$(wildcard tests/*.c tes
 LINT_KMOD_SRC := tools/qemu/gpio-testchip/gpio_testchip.c
 LINT_DEFS := -std=c11 -I. -D_GNU_SOURCE -I/usr/include/libevdev-1.0
 LINT_MCU_DEFS := -std=c11 -I. --target=arm-none-eabi -mcpu=cortex-m4 -mthumb -ffreestanding \
-	-DMOTION_QUEUE_LEN=16 -isystem /usr/lib/arm-none-eabi/include
+	-DMOTION_QUEUE_LEN=16 -DVS_KIN_ONLY=0 -isystem /usr/lib/arm-none-eabi/include
 CLANG ?= clang
 
 .PHONY: lint lint-cppcheck lint-tidy lint-warnings lint-format lint-client lint-includes lint-sets lint-fnsize \

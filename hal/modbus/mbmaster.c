@@ -246,7 +246,8 @@ uint32_t mbd_cycle_us(const mb_profile_t *p, unsigned ndrives, uint32_t baud, ui
 			half += req_halfchars(8u, 5u + 2u * rd[k].n);
 		nreq += 1u + n;
 	}
-	uint64_t line_us = ((uint64_t)half * frame_bits * 1000000u + 2u * baud - 1u) / (2u * baud);
+	uint64_t line_us = ((uint64_t)half * frame_bits * 1000000u + (uint64_t)2u * baud - 1u) /
+			   ((uint64_t)2u * baud);
 	return (uint32_t)line_us + nreq * turnaround_us;
 }
 

@@ -168,8 +168,8 @@ uint32_t mbd_cycle_us(const mb_profile_t *p, unsigned ndrives, uint32_t baud, ui
  * a 16 write of 13 bytes and its 8, a 03 read of 8 and its 13, each with
  * the 3.5-character gap: MBD_GENERIC_HALFCHARS, MBD_GENERIC_REQUESTS). */
 #define MBD_CYCLE_US(nd, half, reqs, baud, bits, turn_us)                                          \
-	((uint32_t)(((uint64_t)(nd) * (half) * (bits)*1000000u + 2u * (baud)-1u) /                 \
-		    (2u * (baud))) +                                                               \
+	((uint32_t)(((uint64_t)(nd) * (half) * (bits)*1000000u + (uint64_t)2u * (baud)-1u) /       \
+		    ((uint64_t)2u * (baud))) +                                                     \
 	 (nd) * (reqs) * (turn_us))
 #define MBD_GENERIC_HALFCHARS 98u
 #define MBD_GENERIC_REQUESTS  2u
