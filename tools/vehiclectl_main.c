@@ -532,6 +532,10 @@ static void stream_print(double t, const vc_sample_t *s, bool json)
 	printf("\n");
 }
 
+/* stream_loop: the unit has no stream (a board that leaves it out NAKs the
+ * subscription's opcode), so the caller polls instead. */
+#define STREAM_UNSUPPORTED (-1)
+
 /* Every group every interval_ms, as the unit sends it: time is the unit's
  * (its tick count), not the host's. Passive: the stream keeps no motion
  * alive (docs/protocol.md). Unsubscribes at the end. */
@@ -552,6 +556,8 @@ static int stream_loop(vc_client_t *c, FILE *csv, bool json, long count, double 
 			(unsigned long)stream_min_period_ms(STREAM_MASK_ALL, (uint32_t)line_baud));
 		return 2;
 	}
+	if (e == VC_E_NAK && c->nak == WIRE_ST_OPCODE)
+		return STREAM_UNSUPPORTED;
 	if (e != VC_OK)
 		return report_err(c, e);
 	if (csv)
@@ -636,9 +642,9 @@ static int loop_cmd(vc_client_t *c, int argc, char **argv, bool json, bool recor
 			return 3;
 		}
 	}
-	if (c->t.stream_next)
-		rc = stream_loop(c, csv, json, count, duration, (unsigned)interval);
-	else
+	rc = c->t.stream_next ? stream_loop(c, csv, json, count, duration, (unsigned)interval)
+			      : STREAM_UNSUPPORTED;
+	if (rc == STREAM_UNSUPPORTED)
 		rc = sample_loop(c, csv, json, count, duration, (unsigned)interval);
 	if (csv && fclose(csv) != 0) {
 		fprintf(stderr, "vehiclectl: %s: write failed\n", file);
