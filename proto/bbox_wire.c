@@ -34,6 +34,14 @@ static void put_sample(uint8_t *p, const bbox_sample_t *s)
 	p[115] = s->alarms;
 }
 
+/* The samples this unit puts in an answer (a client takes up to BBOX_PAGE,
+ * reading on from the count it got): a board answers fewer, as a page of
+ * eight took it 36,500 cycles, more than the 25,000 of a 1 ms tick. */
+#ifndef BBOX_UNIT_PAGE
+#define BBOX_UNIT_PAGE BBOX_PAGE
+#endif
+_Static_assert(BBOX_UNIT_PAGE >= 1 && BBOX_UNIT_PAGE <= BBOX_PAGE, "a page within the client's");
+
 _Static_assert(VS_MAX_AXES == 4, "the sample's layout has four axes");
 
 static size_t put_page(const vehicle_t *v, uint16_t index, uint8_t *resp)
@@ -41,8 +49,8 @@ static size_t put_page(const vehicle_t *v, uint16_t index, uint8_t *resp)
 	const blackbox_t *b = &v->bbox;
 	uint16_t n = (uint16_t)(b->count - index);
 
-	if (n > BBOX_PAGE)
-		n = BBOX_PAGE;
+	if (n > BBOX_UNIT_PAGE)
+		n = BBOX_UNIT_PAGE;
 	resp[0] = b->status;
 	resp[1] = (uint8_t)n;
 	wire_put_u16(resp + 2, b->count);
