@@ -38,6 +38,8 @@ static bool on_send(void *ctx, const canlink_frame_t *f)
 	case CANLINK_ID_STATUS_A + NODE:
 	case CANLINK_ID_STATUS_B + NODE:
 	case CANLINK_ID_STATUS_C + NODE:
+	case CANLINK_ID_STATUS_D + NODE:
+	case CANLINK_ID_STATUS_E + NODE:
 		return !tx_busy;
 	case CANLINK_ID_RESPONSE + NODE:
 		break;
