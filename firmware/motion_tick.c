@@ -47,8 +47,11 @@ static stage_t cruise_stage(motion_t *m, motion_cmd_t *c)
 			if (m->q_count < 2 || !motion_plan_corner(m, 0))
 				motion_backward_pass(m);
 		}
+		/* Nothing to turn: the line in this call, not in another pass
+		 * of next_piece's loop (10 instructions on a line's first tick). */
+		c->stage = 2;
 		if (m->v > 0)
-			return STAGE_SKIP; /* arriving out of a corner, already aligned */
+			goto line; /* arriving out of a corner, already aligned */
 		q32_t a;
 		if (ONLINE_JERK && m->face_ok && m->face_ref.x_mm == r->x_mm &&
 		    m->face_ref.y_mm == r->y_mm && m->face_ref.th_deg == r->th_deg &&
@@ -58,11 +61,13 @@ static stage_t cruise_stage(motion_t *m, motion_cmd_t *c)
 			a = motion_cruise_face(c, r);
 		m->face_ok = false;
 		if (fx_abs64(a) < 1)
-			return STAGE_SKIP;
+			goto line;
+		c->stage = 1;
 		motion_seg_turn(m, a);
 		return STAGE_PIECE;
 	}
 	case 1:
+	line:
 		if (c->len_mm < TINY_MM)
 			return STAGE_SKIP;
 		cruise_line(m, c);

@@ -213,7 +213,9 @@ struct vehicle {
 	/* Supervision limits, fixed point, derived from cfg at init. */
 	uint32_t period_us;
 	uint32_t drive_timeout_ticks, encoder_stuck_ticks;
-	int32_t encoder_stuck_cps_q8;  /* commanded speed that must move the encoder */
+	/* The commanded speed T (counts/s Q8) that must move the encoder, as
+	 * T - 1 and 2T - 1 (supervise_encoder's one compare). */
+	uint32_t encoder_stuck_off, encoder_stuck_span;
 	int64_t following_err_max_q32; /* counts (Q32) */
 	int64_t window_q32;	       /* position window, counts (Q32) */
 	uint32_t window_ticks, settle_timeout_ticks;

@@ -127,9 +127,8 @@ static inline void supervise_encoder(vehicle_t *v, uint8_t i, bool moved)
 		v->encoder_still_ticks[i] = 0;
 		return;
 	}
-	int32_t cps = v->wheel_cps_q8[i];
-	bool commanded =
-	    v->servo && (cps >= v->encoder_stuck_cps_q8 || cps <= -v->encoder_stuck_cps_q8);
+	uint32_t cps = (uint32_t)v->wheel_cps_q8[i];
+	bool commanded = v->servo && cps + v->encoder_stuck_off >= v->encoder_stuck_span;
 	if (!commanded)
 		v->encoder_still_ticks[i] = 0;
 	else if (++v->encoder_still_ticks[i] >= v->encoder_stuck_ticks)
@@ -256,6 +255,19 @@ static void drive_news(vehicle_t *v, uint8_t i, const hal_drive_state_t *st)
 	v->drive_fault_reported[i] = fc;
 }
 
+/* The report's eight bytes as one word, and the bits of the rare news in
+ * it (a fault code, a lost position): one mask folded at compile time
+ * whatever the bit-fields' layout, one test a drive (6 instructions a tick
+ * of a differential base). */
+static inline uint64_t drive_bits(const hal_drive_state_t *st)
+{
+	uint64_t b;
+	__builtin_memcpy(&b, st, sizeof b);
+	return b;
+}
+static const hal_drive_state_t drive_rare = {.fault_code = UINT16_MAX,
+					     .position_lost = VS_DRIVE_STATES};
+
 /* Reads drive i; true when it reports enabled. Each drive's condition is
  * reported once per occurrence (and again after clearAlarm while it
  * persists), so two faulted drives do not take turns at the front of the
@@ -279,8 +291,7 @@ static inline __attribute__((always_inline)) bool sample_drive(vehicle_t *v, uin
 	supervise_encoder(v, i, st.position_counts != v->meas_counts[i]);
 	v->meas_counts[i] = st.position_counts;
 	/* One test for the rare: a restart, a fault, one that ended. */
-	if ((st.fault_code | v->drive_fault_reported[i] | (VS_DRIVE_STATES && st.position_lost)) !=
-	    0)
+	if ((drive_bits(&st) & drive_bits(&drive_rare)) | v->drive_fault_reported[i])
 		drive_news(v, i, &st);
 	return st.enabled;
 }

@@ -173,7 +173,10 @@ static void init_supervision(vehicle_t *v, const vs_config_t *cfg, vs_real_t cou
 	v->encoder_stuck_ticks = ms_to_ticks(cfg->encoder_stuck_ms, cfg->tick_hz);
 	/* A speed that must move the encoder by 20 counts within the window:
 	 * well clear of quantisation, so a slow creep never trips it. */
-	v->encoder_stuck_cps_q8 = (int32_t)(20u * 256u * 1000u / cfg->encoder_stuck_ms);
+	uint32_t stuck_cps_q8 = 20u * 256u * 1000u / cfg->encoder_stuck_ms; /* 85..512,000 */
+	/* |cps| >= T as one unsigned compare: cps + (T - 1) >= 2T - 1. */
+	v->encoder_stuck_off = stuck_cps_q8 - 1u;
+	v->encoder_stuck_span = 2u * stuck_cps_q8 - 1u;
 #ifdef VS_REAL_Q32
 	q32_t following = fx_mul(cfg->following_error_mm, counts_per_mm);
 	q32_t window = fx_mul(cfg->position_window_mm, counts_per_mm);
