@@ -605,7 +605,7 @@ static void path_tick(motion_t *m, fx_twist_t *out)
 				 * stopping piece's last step was its remainder (up to
 				 * a), and a next piece that starts the other way takes
 				 * a as well; both in one tick would change the speed by
-				 * up to 2a (tests/fuzz/findings/fuzz_ops-opposite-
+				 * up to 2a (fuzz_ops's corpus, regress-opposite-
 				 * turns-after-a-stop: 390 deg/s^2 on a 360 limit). */
 				m->rest_tick = false;
 				*out = (fx_twist_t){0};
