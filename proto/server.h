@@ -11,6 +11,7 @@
  * The CAN link is attached from server_can.c, and the serial link that
  * server_poll serves from server_serial.c, so that a platform without CAN
  * and with its own serial loop (the Cortex-M board) links none of them.
+ * Both serial servings carry the telemetry stream of stream_srv.c.
  */
 #ifndef PROTO_SERVER_H
 #define PROTO_SERVER_H
@@ -83,8 +84,6 @@ typedef struct {
 	stream_sub_t sub;
 	uint32_t q_put_total, q_sent_total; /* bytes into the queue, out to the port */
 	uint32_t stream_end;		    /* q_put_total after the last stream frame */
-	console_extra_fn next_extra;	    /* the console's extras after "$stream" */
-	void *next_xctx;
 } server_serial_t;
 
 struct vs_server {
@@ -100,6 +99,11 @@ struct vs_server {
 	void (*poll_can)(vs_server_t *s, uint32_t now_us); /* set by server_attach_can */
 	console_extra_fn main_extra;			   /* the main's extras, after $bbox */
 	void *main_xctx;
+	/* The telemetry stream on the serial link (server_stream_init): the
+	 * main's storage; NULL: none, the subscription is NAKed. */
+	stream_sub_t *stream;
+	console_extra_fn stream_extra; /* the console's extras after "$stream" */
+	void *stream_xctx;
 };
 
 /* The console on v, its '$' extras handled first by extra (NULL: none)
@@ -118,6 +122,18 @@ void server_attach_serial(vs_server_t *s, const vs_link_t *io);
  * order, none dropped; bytes wait in the port while the queue holds more
  * than the backlog. */
 void server_serve_serial(vs_server_t *s, server_serial_t *ss, const vs_link_t *io);
+/* The telemetry stream (stream.h) on the serial link, attached by either
+ * call above, its subscription in sub, for a line of baud (0: STREAM_BAUD):
+ * the subscription frames (WIRE_OP_STREAM) and "$stream" on the console
+ * (stream_srv.c). server_serve_serial attaches it itself. */
+void server_stream_init(vs_server_t *s, stream_sub_t *sub, uint32_t baud);
+/* The main's side, once a pass after the tick: when a frame (or, for
+ * "$stream", a text line) is due, it goes into out (cap bytes) and its
+ * length is returned, unless the last one has not left yet (busy) or the
+ * output has fewer than room bytes free for it: then the slot is skipped
+ * and counted, its sequence number passed over, and 0 returned (0 too
+ * when none is due). No answer then waits behind more than one of them. */
+size_t server_stream_next(vs_server_t *s, bool busy, size_t room, uint8_t *out, size_t cap);
 /* After a poll, for a main that sleeps in poll(2) between polls: bytes that
  * wait for the port to take them (wait for POLLOUT), whether the service
  * leaves received bytes until the port takes answers (do not wait for

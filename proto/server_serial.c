@@ -13,9 +13,6 @@
 
 #include <string.h>
 
-#include "fmt.h"
-#include "numparse.h"
-
 _Static_assert(CONSOLE_REPLY_MAX <= FRAME_RESP_MAX, "a console reply fits a step's room");
 
 static server_serial_t *ss_of(const vs_server_t *s)
@@ -91,132 +88,23 @@ static bool room(server_serial_t *ss)
 	return ss->q_len <= SERVER_SERIAL_BACKLOG;
 }
 
-/* A subscription request (frame_stream_fn): at the tick count now. */
-static size_t stream_req(void *ctx, const uint8_t *p, size_t len, uint8_t *resp, int *st)
-{
-	vs_server_t *s = ctx;
-	server_serial_t *ss = ss_of(s);
-
-	return stream_subscribe(&ss->sub, s->v->cfg.tick_hz, s->v->ticks, p, len, resp, st);
-}
-
 /* A stream frame when one is due, ahead of this poll's answers, unless the
  * last one has not left yet (the line is behind: the slot is skipped, its
  * sequence number too, and counted), so that no answer ever waits behind
  * more than one stream frame. */
 static void stream_emit(vs_server_t *s, server_serial_t *ss)
 {
-	uint8_t payload[STREAM_PAYLOAD_MAX];
-	char out[STREAM_TEXT_MAX];
-	stream_sample_t smp;
-	uint8_t seq;
-	size_t n;
+	uint8_t out[STREAM_TEXT_MAX];
+	/* The last frame is unsent while its end lies within the queued bytes
+	 * (stream_end - sent in 1..q_len): a test that holds across the
+	 * counters' wrap, however long ago the last frame went. */
+	size_t n = server_stream_next(s, ss->stream_end - ss->q_sent_total - 1u < ss->q_len,
+				      SERVER_SERIAL_TXQ - ss->q_len, out, sizeof(out));
 
-	if (!stream_due(&ss->sub, s->v->ticks))
-		return;
-	seq = ss->sub.seq++;
-	if ((int32_t)(ss->stream_end - ss->q_sent_total) > 0 ||
-	    SERVER_SERIAL_TXQ - ss->q_len < sizeof(out)) {
-		ss->sub.skipped++;
-		return;
+	if (n) {
+		q_copy(ss, out, n);
+		ss->stream_end = ss->q_put_total;
 	}
-	stream_read(s->v, &smp);
-	if (ss->sub.text) {
-		/* between console lines only: never inside a reply */
-		n = stream_text(&smp, ss->sub.mask, seq, s->v->ticks, out, sizeof(out));
-	} else {
-		n = stream_encode(&smp, ss->sub.mask, s->v->ticks, payload, sizeof(payload));
-		n = frame_encode((uint8_t *)out, sizeof(out), seq, WIRE_OP_STREAM, payload, n);
-	}
-	q_copy(ss, (const uint8_t *)out, n);
-	ss->stream_end = ss->q_put_total;
-	ss->sub.sent++;
-}
-
-/* "$stream": the subscription and its counters; "$stream off"; "$stream
- * GROUPS PERIOD_MS": the text form on this port (GROUPS "all", a mask, or
- * names joined by commas: pose,state). */
-static bool parse_groups(const char *a, uint16_t *mask)
-{
-	int64_t v;
-
-	if (np_streq_nocase(a, "all")) {
-		*mask = STREAM_MASK_ALL;
-		return true;
-	}
-	if (np_parse_int(a, 1, STREAM_MASK_ALL, &v) == NP_OK) {
-		*mask = (uint16_t)v;
-		return true;
-	}
-	*mask = 0;
-	while (*a) {
-		char name[16];
-		size_t n = 0;
-		unsigned g;
-
-		while (*a && *a != ',' && n + 1 < sizeof(name))
-			name[n++] = *a++;
-		name[n] = '\0';
-		for (g = 0; g < STREAM_GROUPS && !np_streq_nocase(name, stream_group_names[g]); g++)
-			;
-		if (g == STREAM_GROUPS || (*a && *a != ','))
-			return false;
-		*mask = (uint16_t)(*mask | (1u << g));
-		if (*a == ',')
-			a++;
-	}
-	return *mask != 0;
-}
-
-static void stream_text_sub(vs_server_t *s, server_serial_t *ss, char **argv, char *reply,
-			    size_t cap)
-{
-	uint16_t mask;
-	int64_t period;
-	int st;
-
-	if (!parse_groups(argv[1], &mask) ||
-	    np_parse_int(argv[2], 1, UINT16_MAX, &period) != NP_OK) {
-		fmt_print(reply, cap, "error %d $stream GROUPS PERIOD_MS: groups all, a mask or %s",
-			  CONSOLE_E_EXTRA, "pose,cmd,meas,state,alarm,battery,io,queue");
-		return;
-	}
-	st = stream_start(&ss->sub, s->v->cfg.tick_hz, s->v->ticks, mask, (uint16_t)period, true);
-	if (st == WIRE_ST_RATE)
-		fmt_print(
-		    reply, cap,
-		    "error %d $stream: the line carries these every %lu ms at the fastest",
-		    CONSOLE_E_EXTRA,
-		    (unsigned long)stream_min_period_bytes(stream_text_bytes(mask), ss->sub.baud));
-	else if (st != WIRE_ST_OK)
-		fmt_print(reply, cap, "error %d $stream: a period of whole ticks", CONSOLE_E_EXTRA);
-	else
-		fmt_print(reply, cap, "ok stream mask 0x%02X period %u text", (unsigned)mask,
-			  (unsigned)period);
-}
-
-static bool stream_extra(void *ctx, int argc, char **argv, char *reply, size_t cap)
-{
-	vs_server_t *s = ctx;
-	server_serial_t *ss = ss_of(s);
-
-	if (argc < 1 || !np_streq_nocase(argv[0], "$stream"))
-		return ss->next_extra ? ss->next_extra(ss->next_xctx, argc, argv, reply, cap)
-				      : false;
-	if (argc == 1)
-		fmt_print(reply, cap, "ok stream mask 0x%02X period %u sent %lu skipped %lu%s",
-			  (unsigned)ss->sub.mask, (unsigned)ss->sub.period_ms,
-			  (unsigned long)ss->sub.sent, (unsigned long)ss->sub.skipped,
-			  ss->sub.text ? " text" : "");
-	else if (argc == 2 && np_streq_nocase(argv[1], "off")) {
-		stream_start(&ss->sub, s->v->cfg.tick_hz, s->v->ticks, 0, 0, false);
-		fmt_print(reply, cap, "ok stream off");
-	} else if (argc == 3)
-		stream_text_sub(s, ss, argv, reply, cap);
-	else
-		fmt_print(reply, cap, "error %d $stream takes 0, 1 (off) or 2 arguments, got %d",
-			  CONSOLE_E_ARITY, argc - 1);
-	return true;
 }
 
 static void poll_serial(vs_server_t *s, uint32_t now_ms)
@@ -291,21 +179,15 @@ void server_serve_serial(vs_server_t *s, server_serial_t *ss, const vs_link_t *i
 
 	memset(ss, 0, sizeof(*ss));
 	ss->io = *io;
-	stream_sub_init(&ss->sub, STREAM_BAUD);
 	link_init(&s->serial, &s->con, &q);
-	frame_srv_set_stream(&s->serial.fs, stream_req, s);
-	ss->next_extra = s->con.extra;
-	ss->next_xctx = s->con.xctx;
-	console_set_extra(&s->con, stream_extra, s);
+	server_stream_init(s, &ss->sub, STREAM_BAUD);
 	s->poll_serial = poll_serial;
 }
 
 void server_serial_set_baud(vs_server_t *s, uint32_t baud)
 {
-	server_serial_t *ss = ss_of(s);
-
-	if (ss)
-		ss->sub.baud = baud ? baud : STREAM_BAUD;
+	if (s->stream)
+		s->stream->baud = baud ? baud : STREAM_BAUD;
 }
 
 const stream_sub_t *server_serial_stream(const vs_server_t *s)

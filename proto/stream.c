@@ -7,15 +7,14 @@
 #include "fmt.h"
 #include "wire.h"
 
+/* The units and descriptions are docs (tests/test_stream.c reads them). */
 #define STREAM_FIELD(name, group, type, frame, off, unit, what)                                    \
 	{#name,                                                                                    \
 	 STREAM_G_##group,                                                                         \
 	 STREAM_T_##type,                                                                          \
 	 frame,                                                                                    \
 	 off,                                                                                      \
-	 (uint16_t)offsetof(stream_sample_t, name),                                                \
-	 unit,                                                                                     \
-	 what},
+	 (uint16_t)offsetof(stream_sample_t, name)},
 const stream_field_t stream_fields[] = {
 #include "stream.def"
 };
@@ -177,45 +176,43 @@ static int64_t get_le(const uint8_t *p, unsigned type)
 
 /* ---- serial ---------------------------------------------------------------- */
 
-/* The table's rows in the serial order: by group, then as listed. */
-static uint8_t serial_order[sizeof(stream_fields) / sizeof(stream_fields[0])];
-static uint8_t group_start[STREAM_GROUPS + 1];
+/* The rows of mask's groups in the serial order, by group, then as listed:
+ * from r = {0, 0}, the next row, NULL after the last. */
+typedef struct {
+	unsigned g, i;
+} rows_t;
 
-static void order_init(void)
+static const stream_field_t *next_row(rows_t *r, uint16_t mask)
 {
-	unsigned k = 0;
+	for (; r->g < STREAM_GROUPS; r->g++, r->i = 0) {
+		if (!(mask & (1u << r->g)))
+			continue;
+		while (r->i < stream_field_count) {
+			const stream_field_t *f = &stream_fields[r->i++];
 
-	if (group_start[STREAM_GROUPS])
-		return;
-	for (unsigned g = 0; g < STREAM_GROUPS; g++) {
-		group_start[g] = (uint8_t)k;
-		for (unsigned i = 0; i < stream_field_count; i++)
-			if (stream_fields[i].group == g)
-				serial_order[k++] = (uint8_t)i;
+			if (f->group == r->g)
+				return f;
+		}
 	}
-	group_start[STREAM_GROUPS] = (uint8_t)k;
+	return NULL;
 }
 
 size_t stream_encode(const stream_sample_t *s, uint16_t mask, uint32_t tick, uint8_t *out,
 		     size_t cap)
 {
 	size_t n = STREAM_HDR;
+	rows_t r = {0, 0};
+	const stream_field_t *f;
 
 	if (cap < stream_payload_len(mask))
 		return 0;
-	order_init();
 	wire_put_u16(out, mask);
 	wire_put_u32(out + 2, tick);
-	for (unsigned g = 0; g < STREAM_GROUPS; g++) {
-		if (!(mask & (1u << g)))
-			continue;
-		for (unsigned k = group_start[g]; k < group_start[g + 1]; k++) {
-			const stream_field_t *f = &stream_fields[serial_order[k]];
-			size_t w = stream_type_size(f->type);
+	while ((f = next_row(&r, mask)) != NULL) {
+		size_t w = stream_type_size(f->type);
 
-			put_le(out + n, stream_get(s, f), w);
-			n += w;
-		}
+		put_le(out + n, stream_get(s, f), w);
+		n += w;
 	}
 	return n;
 }
@@ -223,6 +220,8 @@ size_t stream_encode(const stream_sample_t *s, uint16_t mask, uint32_t tick, uin
 int stream_decode(const uint8_t *p, size_t len, uint16_t *mask, uint32_t *tick, stream_sample_t *s)
 {
 	size_t n = STREAM_HDR;
+	rows_t r = {0, 0};
+	const stream_field_t *f;
 	uint16_t m;
 
 	if (len < STREAM_HDR)
@@ -232,16 +231,9 @@ int stream_decode(const uint8_t *p, size_t len, uint16_t *mask, uint32_t *tick, 
 		return -1;
 	*mask = m;
 	*tick = wire_get_u32(p + 2);
-	order_init();
-	for (unsigned g = 0; g < STREAM_GROUPS; g++) {
-		if (!(m & (1u << g)))
-			continue;
-		for (unsigned k = group_start[g]; k < group_start[g + 1]; k++) {
-			const stream_field_t *f = &stream_fields[serial_order[k]];
-
-			stream_set(s, f, get_le(p + n, f->type));
-			n += stream_type_size(f->type);
-		}
+	while ((f = next_row(&r, m)) != NULL) {
+		stream_set(s, f, get_le(p + n, f->type));
+		n += stream_type_size(f->type);
 	}
 	return 0;
 }
@@ -250,18 +242,11 @@ size_t stream_text(const stream_sample_t *s, uint16_t mask, uint8_t seq, uint32_
 		   size_t cap)
 {
 	size_t n = fmt_print(out, cap, "~stream %u %lu", (unsigned)seq, (unsigned long)tick);
+	rows_t r = {0, 0};
+	const stream_field_t *f;
 
-	for (unsigned g = 0; g < STREAM_GROUPS; g++) {
-		if (!(mask & (1u << g)))
-			continue;
-		for (unsigned i = 0; i < stream_field_count && n < cap; i++) {
-			const stream_field_t *f = &stream_fields[i];
-
-			if (f->group == g)
-				n += fmt_print(out + n, cap - n, " %s %lld", f->name,
-					       (long long)stream_get(s, f));
-		}
-	}
+	while (n < cap && (f = next_row(&r, mask)) != NULL)
+		n += fmt_print(out + n, cap - n, " %s %lld", f->name, (long long)stream_get(s, f));
 	if (n + 1u >= cap)
 		return 0;
 	out[n++] = '\n';
@@ -302,7 +287,6 @@ void stream_sub_init(stream_sub_t *ss, uint32_t baud)
 {
 	memset(ss, 0, sizeof(*ss));
 	ss->baud = baud ? baud : STREAM_BAUD;
-	order_init(); /* now, not in the first frame's period */
 }
 
 int stream_start(stream_sub_t *ss, uint32_t tick_hz, uint32_t now_tick, uint16_t mask,

@@ -61,7 +61,6 @@ typedef struct {
 	const char *name;
 	uint8_t group, type, can_frame, can_offset;
 	uint16_t at; /* offsetof in stream_sample_t */
-	const char *unit, *what;
 } stream_field_t;
 
 extern const stream_field_t stream_fields[];
