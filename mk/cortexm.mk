@@ -39,7 +39,8 @@ MCU_CPU_cortex-m0 := -mcpu=cortex-m0 -mthumb -mfloat-abi=soft
 
 # The console and binary-frame parsers; the host client and CAN mapping stay on the host.
 MCU_PROTO_SRC := $(filter $(addprefix proto/,cmdtab.c dispatch.c console.c fmt.c numparse.c wire.c frame.c \
-	frame_srv.c link.c port.c server.c console_config.c bbox_wire.c bbox_text.c),$(PROTO_SRC))
+	frame_srv.c link.c port.c server.c console_config.c bbox_wire.c bbox_text.c \
+	stream.c stream_read.c stream_srv.c),$(PROTO_SRC))
 # The plant behind the HAL (hal/cortexm/plant.h): MCU_DRIVES=loop, the
 # loopback drives (the board suite's reference, without drive states);
 # modbus, wheel drives over RS-485 Modbus RTU on the second UART, with the

@@ -24,13 +24,20 @@
 #ifndef BOARD_UART_BAUD
 #define BOARD_UART_BAUD 115200u
 #endif
+/* The UART's divisor, and the line speed it gives (115,207 baud at 25 MHz):
+ * what the telemetry stream's budget counts with. */
+#define BOARD_UART_DIV	     (BOARD_CPU_HZ / BOARD_UART_BAUD)
+#define BOARD_UART_LINE_BAUD (BOARD_CPU_HZ / BOARD_UART_DIV)
 
 /* UART: init, and the command link over it (never blocks; transmit bytes
  * wait in a ring and go out from uart_poll_tx). */
 void uart_init(void);
 void uart_poll_tx(void);
-/* Bytes still waiting in the transmit ring. */
+/* Bytes still waiting in the transmit ring, the room left in it, and the
+ * bytes sent from it since uart_init (modulo 2^32). */
 size_t uart_tx_pending(void);
+size_t uart_tx_room(void);
+uint32_t uart_tx_sent(void);
 extern const vs_link_t uart_link;
 
 /* SysTick: one interrupt per control period; the handler only counts. */

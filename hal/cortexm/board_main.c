@@ -3,10 +3,11 @@
  * binary frames on the UART, one vehicle_tick per SysTick period, the
  * watchdog fed after each.
  *
- * Between ticks the main loop serves the link and drains the UART. A
- * period that passes while the previous tick or a command still runs is
- * seen by the firmware through now_us (its overrun fault), never silently
- * absorbed.
+ * After each tick the telemetry stream's frame, if one is due (server.h,
+ * server_stream_next); between ticks the main loop serves the link and
+ * drains the UART. A period that passes while the previous tick or a
+ * command still runs is seen by the firmware through now_us (its overrun
+ * fault), never silently absorbed.
  */
 #include "board.h"
 #include "firmware/config_keep.h"
@@ -26,8 +27,10 @@ static vehicle_t unit;
 #define BOARD_BBOX_SAMPLES 8u
 #define BOARD_BBOX_EVERY   250u
 static bbox_sample_t bbox_ring[BOARD_BBOX_SAMPLES];
-static vs_server_t srv; /* the console and the binary frames on the UART */
-static cfgkeep_t keep;	/* $config: the compiled-in base, the store's overlay */
+static vs_server_t srv;	    /* the console and the binary frames on the UART */
+static cfgkeep_t keep;	    /* $config: the compiled-in base, the store's overlay */
+static stream_sub_t stream; /* the telemetry stream on the UART */
+static uint32_t stream_end; /* uart_tx_sent() once the last stream frame has left */
 
 /* What the tick and the requests cost, in processor cycles (systick_cycles):
  * read from outside, through a debugger or QEMU's monitor (tests/mcu,
@@ -38,6 +41,10 @@ typedef struct {
 	uint64_t tick_sum;
 	uint32_t requests, req_last, req_worst;
 	uint32_t plans, plan_worst; /* idle planning calls that walked */
+	/* the last and worst telemetry stream frame (or line) put into the
+	 * UART's ring, and the worst of a tick and the frame due after it
+	 * together ($stream counts the frames) */
+	uint32_t stream_last, stream_worst, due_worst;
 } board_cost_t;
 volatile board_cost_t board_cost;
 
@@ -96,6 +103,32 @@ static uint32_t serve_link(uint32_t done, uint32_t now_ms, uint32_t seen, uint32
 	return r;
 }
 
+/* The telemetry stream's frame (or $stream's line) due after this tick,
+ * into the UART's ring if the last one has left and the ring has room for
+ * it; else the slot is skipped and counted (server_stream_next). A request
+ * is taken only into an empty ring (serve_link), so an answer waits behind
+ * one stream frame at most. Not inlined: its buffer is on the stack only
+ * while it runs. */
+static __attribute__((noinline)) void serve_stream(uint32_t tick_cost)
+{
+	uint8_t out[STREAM_TEXT_MAX];
+	uint32_t t0 = systick_cycles(), c;
+	/* unsent while its end lies within the ring's bytes (server_serial.c) */
+	size_t n = server_stream_next(&srv, stream_end - uart_tx_sent() - 1u < uart_tx_pending(),
+				      uart_tx_room(), out, sizeof(out));
+
+	if (!n)
+		return;
+	uart_link.write(NULL, out, n);
+	stream_end = uart_tx_sent() + (uint32_t)uart_tx_pending();
+	c = systick_cycles() - t0;
+	board_cost.stream_last = c;
+	if (c > board_cost.stream_worst)
+		board_cost.stream_worst = c;
+	if (tick_cost + c > board_cost.due_worst)
+		board_cost.due_worst = tick_cost + c;
+}
+
 #ifdef BOARD_STORE_CUT
 /* The reset-in-the-save test image's $storecut K (flashstore.h). */
 static bool store_cut(void *ctx, int argc, char **argv, char *reply, size_t cap)
@@ -122,6 +155,7 @@ int main(void)
 	server_init(&srv, &unit, BOARD_EXTRA, NULL, NULL, NULL);
 	console_set_keep(&srv.con, &keep);
 	server_attach_serial(&srv, &uart_link);
+	server_stream_init(&srv, &stream, BOARD_UART_LINE_BAUD);
 	systick_init(tick_hz);
 #ifndef BOARD_STORE_CUT /* its cut stops the board as a power cut would */
 	wdog_start();
@@ -146,6 +180,7 @@ int main(void)
 			/* The tick's own cost over a period is fault 209. */
 			vehicle_tick_busy(&unit, c / (BOARD_CPU_HZ / 1000000u));
 			plant_tick();
+			serve_stream(c);
 			continue;
 		}
 		r = serve_link(done, done * period_us / 1000u, seen, &c);

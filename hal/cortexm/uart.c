@@ -26,7 +26,7 @@ static uint32_t tx_head, tx_tail; /* free-running; head - tail = bytes queued */
 
 void uart_init(void)
 {
-	UART->bauddiv = BOARD_CPU_HZ / BOARD_UART_BAUD;
+	UART->bauddiv = BOARD_UART_DIV;
 	UART->ctrl = 3u;
 }
 
@@ -50,6 +50,16 @@ size_t uart_tx_pending(void)
 	return tx_head - tx_tail;
 }
 
+size_t uart_tx_room(void)
+{
+	return TX_RING - (tx_head - tx_tail);
+}
+
+uint32_t uart_tx_sent(void)
+{
+	return tx_tail;
+}
+
 static size_t u_read(void *ctx, uint8_t *buf, size_t max)
 {
 	(void)ctx;
@@ -64,7 +74,7 @@ static size_t u_read(void *ctx, uint8_t *buf, size_t max)
 static size_t u_write(void *ctx, const uint8_t *buf, size_t len)
 {
 	(void)ctx;
-	size_t room = TX_RING - (tx_head - tx_tail);
+	size_t room = uart_tx_room();
 	size_t n = len < room ? len : room;
 	size_t at = tx_head % TX_RING, first = TX_RING - at;
 	if (first > n)

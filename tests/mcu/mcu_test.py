@@ -38,12 +38,19 @@ import os
 import re
 import select
 import socket
+import struct
 import subprocess
 import sys
 import tempfile
 import time
 import traceback
 import tty
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "python"))
+from vehicleservice import stream as vs_stream  # noqa: E402
+from vehicleservice.client import Vehicle  # noqa: E402
+from vehicleservice.errors import NakError  # noqa: E402
+from vehicleservice.transport import FrameTransport  # noqa: E402
 
 ICOUNT_SHIFT = 6
 CPU_HZ = 25000000
@@ -220,13 +227,15 @@ class Board:
             time.sleep(0.001)
 
     def costs(self):
-        out = self.monitor("xp /12wx 0x%x" % symbol(self.elf, "board_cost"))
+        out = self.monitor("xp /14wx 0x%x" % symbol(self.elf, "board_cost"))
         w = [int(x, 16) for x in re.findall(r"\b0x([0-9a-f]{8})\b", out)]
         # ticks, tick_last, tick_worst, (pad), tick_sum lo, hi, requests,
-        # req_last, req_worst, plans, plan_worst
+        # req_last, req_worst, plans, plan_worst, stream_last,
+        # stream_worst, due_worst
         return {"ticks": w[0], "tick_last": w[1], "tick_worst": w[2],
                 "tick_sum": w[4] | w[5] << 32, "requests": w[6], "req_last": w[7],
-                "req_worst": w[8], "plans": w[9], "plan_worst": w[10]}
+                "req_worst": w[8], "plans": w[9], "plan_worst": w[10], "stream_last": w[11],
+                "stream_worst": w[12], "due_worst": w[13]}
 
 
 _symbols = {}
@@ -885,6 +894,169 @@ def c_bbox(b, vehiclectl):
     b.drain()
 
 
+class PtyPort:
+    """The board's pty as the pyserial port vehicleservice's FrameTransport
+    reads and writes."""
+
+    def __init__(self, b):
+        self.b = b
+        self.timeout = 0.05
+        self.in_waiting = 0
+
+    def write(self, data):
+        self.b.write(data)
+
+    def flush(self):
+        pass
+
+    def read(self, n):
+        if select.select([self.b.fd], [], [], self.timeout)[0]:
+            return os.read(self.b.fd, 4096)
+        return b""
+
+
+def frames_client(b):
+    assert b.drain() == b"", "bytes before the frames"
+    return Vehicle(FrameTransport(PtyPort(b), timeout=5.0))
+
+
+def subscribe(v, mask, period_ms):
+    """The subscription's answer: mask, period, frame bytes, fastest
+    period, tick rate. The frames kept while waiting for it were the
+    stream before it: dropped."""
+    r = struct.unpack("<5H", v.transport.exchange(vs_stream.OP_STREAM,
+                                                  struct.pack("<HH", mask, period_ms)))
+    v.transport._stream.clear()
+    return r
+
+
+def next_frames(v, n):
+    """The next n stream frames as (seq, mask, tick, {row: integer})."""
+    out = []
+    for _ in range(n):
+        seq, payload = v.transport.next_stream(REPLY_S)
+        out.append((seq,) + vs_stream.decode(payload))
+    return out
+
+
+def consecutive(frames, period):
+    """Sequence numbers one apart, tick stamps exactly period ticks apart:
+    no frame skipped."""
+    for a, b2 in zip(frames, frames[1:]):
+        assert b2[0] == (a[0] + 1) & 0xFF and b2[2] - a[2] == period, \
+            "frames %r then %r" % (a[:3], b2[:3])
+
+
+# docs/protocol.md's budget at the board's line (115,207 baud: 25 MHz / 217):
+# pose+state, 28 bytes a frame, every 4 ms at the fastest; every group, 52
+# bytes, every 7 ms; $stream's text line of every group, 370 bytes at most,
+# every 43 ms.
+AT_REST = {"x_dmm": 1003, "y_dmm": -505, "theta_mdeg": 30000, "state": 25, "alarms": 0}
+
+
+def c_telemetry_stream(b):
+    """The telemetry stream in frames (docs/protocol.md): pose and state
+    every 10 ms at rest, 20 frames one tick count period apart holding
+    exactly what getPosition and getState read; requests between the
+    frames all answered, none skipped; a rate the line cannot carry NAKed
+    (8) and the stream in force kept; none after the unsubscription; and
+    the stream is no request: the link watchdog stops a move it watches."""
+    expect(b, "setPosition 100.25 -50.5 30", "ok true")
+    expect(b, "getPosition", "ok true 100.250 -50.500 30.000")
+    expect(b, "getState", 'ok true 25 "Unpowered"')
+    v = frames_client(b)
+    n0 = b.costs()["requests"]
+    assert subscribe(v, 0x09, 10) == (0x09, 10, 28, 4, 1000)
+    run = next_frames(v, 20)
+    assert run[0][0] == 0, "first frame seq %d" % run[0][0]
+    consecutive(run, 10)
+    for seq, mask, tick, vals in run:
+        assert mask == 0x09 and vals == AT_REST, (seq, mask, tick, vals)
+    # frames are no requests: only the subscription was counted
+    assert b.counted(n0 + 1)["requests"] == n0 + 1
+    for _ in range(20):
+        assert v.call("getState") == [True, 25, "Unpowered"]
+        assert v.call("getPosition") == [True, 100.25, -50.5, 30.0]
+    more = next_frames(v, 5)
+    run += more
+    consecutive(run, 10)
+    st = v.console_line("$stream")
+    m = re.match(r"stream mask 0x09 period 10 sent (\d+) skipped 0$", st)
+    assert m and int(m.group(1)) >= len(run), st
+    # every group every 6 ms: over the line's 3/4; the stream goes on
+    try:
+        subscribe(v, 0xFF, 6)
+        raise AssertionError("every group at 6 ms taken")
+    except NakError as e:
+        assert e.status == 8, e
+    consecutive(run + next_frames(v, 3), 10)
+    assert subscribe(v, 0xFF, 7) == (0xFF, 7, 52, 7, 1000)
+    seq, mask, _, vals = next_frames(v, 1)[0]
+    assert mask == 0xFF and seq == 0 and vals["battery_cV"] == 2400 and vals["queue"] == 0, vals
+    assert subscribe(v, 0, 0) == (0, 0, 0, 0, 1000)
+    b.wait(100)
+    assert not v.transport._buf and b.drain() == b"", "a frame after the unsubscription"
+    # The link watchdog (1 s) on a move while only frames flow: warning 153.
+    assert v.console_line("$watchdog 1000") == "watchdog 1000"
+    assert subscribe(v, 0x19, 100) == (0x19, 100, 33, 4, 1000)
+    for name, args in (("setPower", (True,)), ("setServo", (True,)),
+                       ("moveForward", (3000.0,))):
+        assert v.call(name, *args)[0], name
+    # Busy, the warning raised while it brakes, then Warning-153 at rest
+    states = []
+    for _ in range(60):
+        seq, _, _, vals = next_frames(v, 1)[0]
+        states.append((vals["state"], vals["alarm_code"]))
+        if vals["state"] == 18:
+            break
+    codes = [code for _, code in states if code]
+    assert (17, 0) in states and states[-1] == (18, 153) and set(codes) == {153}, states
+    assert subscribe(v, 0, 0) == (0, 0, 0, 0, 1000)
+    assert v.console_line("$watchdog 0") == "watchdog 0"
+    b.wait(100)
+    assert b.drain() == b""
+    c = b.costs()
+    print("  a stream frame: last %d cycles, worst %d (%d instructions); a tick with its "
+          "frame: worst %d cycles, %.1f %% of a 1 ms period at 25 MHz"
+          % (c["stream_last"], c["stream_worst"], instructions(c["stream_worst"]),
+             c["due_worst"], 100.0 * c["due_worst"] / PERIOD_CYCLES))
+
+
+def c_stream_text(b):
+    """$stream, the text form on the console: ~stream lines between the
+    replies, one period of ticks apart; a rate the line cannot carry
+    refused; none after $stream off."""
+    expect(b, "$stream", "ok stream mask 0x00 period 0 sent 0 skipped 0")
+    expect(b, "$stream all 42",
+           "error 8 $stream: the line carries these every 43 ms at the fastest")
+    expect(b, "$stream pose,speed 100", "error 8 $stream GROUPS PERIOD_MS: groups all, a mask "
+           "or pose,cmd,meas,state,alarm,battery,io,queue")
+    expect(b, "$stream pose,state 100", "ok stream mask 0x09 period 100 text")
+    lines = [b.readline() for _ in range(5)]
+    got = []
+    for line in lines:
+        m = re.match(r"~stream (\d+) (\d+) x_dmm 0 y_dmm 0 theta_mdeg 0 state 25 alarms 0$",
+                     line)
+        assert m, lines
+        got.append((int(m.group(1)), int(m.group(2))))
+    assert [s for s, _ in got] == [0, 1, 2, 3, 4], got
+    assert all(t1 - t0 == 100 for (_, t0), (_, t1) in zip(got, got[1:])), got
+
+    def reply(line):
+        b.write(line.encode() + b"\n")
+        while True:
+            r = b.readline()
+            if not r.startswith("~stream "):
+                return r
+
+    r = reply("$stream")
+    assert re.match(r"ok stream mask 0x09 period 100 sent \d+ skipped 0 text$", r), r
+    assert reply("getState") == 'ok true 25 "Unpowered"'
+    assert reply("$stream off") == "ok stream off"
+    b.wait(300)
+    assert b.drain() == b"", "a line after $stream off"
+
+
 def c_tick_cost(b):
     c = b.costs()
     mean = c["tick_sum"] / c["ticks"]
@@ -896,6 +1068,11 @@ def c_tick_cost(b):
     assert c["tick_worst"] < PERIOD_CYCLES // 2, "worst tick %d cycles" % c["tick_worst"]
     # every request of the cases so far fitted a period: none delayed a tick
     assert c["req_worst"] < PERIOD_CYCLES, "worst request %d cycles" % c["req_worst"]
+    # a tick and the stream frame due after it, under the tick's rule
+    print("  with a stream frame: worst %d cycles (%d instructions); the frame alone: "
+          "worst %d cycles" % (c["due_worst"], instructions(c["due_worst"]),
+                               c["stream_worst"]))
+    assert 0 < c["stream_worst"] <= c["due_worst"] < PERIOD_CYCLES // 2, c
     assert b.ticks()[1] == 0, "tick overruns"
 
 
@@ -1150,6 +1327,8 @@ def main():
                  [("link_watchdog", c_link_watchdog, ())] +
                  [("vehiclectl_frames", c_vehiclectl_frames, (vehiclectl,)),
                   ("bbox", c_bbox, (vehiclectl,)),
+                  ("telemetry_stream", c_telemetry_stream, ()),
+                  ("stream_text", c_stream_text, ()),
                   ("jerk_moves", c_jerk_moves, ()),
                   ("tick_cost", c_tick_cost, ()),
                   ("request_costs", c_request_costs, ()),
