@@ -532,8 +532,9 @@ static void stream_print(double t, const vc_sample_t *s, bool json)
 	printf("\n");
 }
 
-/* stream_loop: the unit has no stream (a board that leaves it out NAKs the
- * subscription's opcode), so the caller polls instead. */
+/* stream_loop: the unit has no stream (an older unit, or a board image
+ * from before the board carried it, NAKs the subscription's opcode), so
+ * the caller polls instead. */
 #define STREAM_UNSUPPORTED (-1)
 
 /* Every group every interval_ms, as the unit sends it: time is the unit's
