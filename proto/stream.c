@@ -151,13 +151,13 @@ void stream_set(stream_sample_t *s, const stream_field_t *f, int64_t val)
 	}
 }
 
-/* Little-endian, the field's width. */
+/* Little-endian, the field's width (4 bytes at most). */
 static void put_le(uint8_t *p, int64_t val, size_t n)
 {
-	uint64_t u = (uint64_t)val;
+	uint32_t u = (uint32_t)val;
 
-	for (size_t i = 0; i < n; i++)
-		p[i] = (uint8_t)(u >> (8u * i));
+	for (size_t i = 0; i < n; i++, u >>= 8)
+		p[i] = (uint8_t)u;
 }
 
 static int64_t get_le(const uint8_t *p, unsigned type)
@@ -238,6 +238,33 @@ int stream_decode(const uint8_t *p, size_t len, uint16_t *mask, uint32_t *tick, 
 	return 0;
 }
 
+/* " name v" at out + n, v in decimal (every field fits 32 bits), as far as
+ * cap holds it with a NUL after; the length the line would have. A line's
+ * fields without the general formatter: a few times cheaper on a board. */
+static size_t put_field(char *out, size_t n, size_t cap, const char *name, int64_t v)
+{
+	char b[13];
+	size_t k = sizeof(b);
+	uint32_t u = (uint32_t)(v < 0 ? -v : v);
+
+	do {
+		b[--k] = (char)('0' + u % 10u);
+		u /= 10u;
+	} while (u);
+	if (v < 0)
+		b[--k] = '-';
+	b[--k] = ' ';
+	if (n + 1 < cap)
+		out[n] = ' ';
+	for (n++; *name; name++, n++)
+		if (n + 1 < cap)
+			out[n] = *name;
+	for (; k < sizeof(b); k++, n++)
+		if (n + 1 < cap)
+			out[n] = b[k];
+	return n;
+}
+
 size_t stream_text(const stream_sample_t *s, uint16_t mask, uint8_t seq, uint32_t tick, char *out,
 		   size_t cap)
 {
@@ -245,8 +272,8 @@ size_t stream_text(const stream_sample_t *s, uint16_t mask, uint8_t seq, uint32_
 	rows_t r = {0, 0};
 	const stream_field_t *f;
 
-	while (n < cap && (f = next_row(&r, mask)) != NULL)
-		n += fmt_print(out + n, cap - n, " %s %lld", f->name, (long long)stream_get(s, f));
+	while ((f = next_row(&r, mask)) != NULL)
+		n = put_field(out, n, cap, f->name, stream_get(s, f));
 	if (n + 1u >= cap)
 		return 0;
 	out[n++] = '\n';
