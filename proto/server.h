@@ -127,12 +127,12 @@ void server_serve_serial(vs_server_t *s, server_serial_t *ss, const vs_link_t *i
  * the subscription frames (WIRE_OP_STREAM) and "$stream" on the console
  * (stream_srv.c). server_serve_serial attaches it itself. */
 void server_stream_init(vs_server_t *s, stream_sub_t *sub, uint32_t baud);
-/* The main's side, once a pass after the tick: when a frame (or, for
- * "$stream", a text line) is due, it goes into out (cap bytes) and its
- * length is returned, unless the last one has not left yet (busy) or the
- * output has fewer than room bytes free for it: then the slot is skipped
- * and counted, its sequence number passed over, and 0 returned (0 too
- * when none is due). No answer then waits behind more than one of them. */
+/* The main's side, once after each tick: when a frame (or, for "$stream",
+ * a text line) is due, it goes into out (cap bytes) and its length is
+ * returned, unless the last one has not left yet (busy) or the output's
+ * room (its free bytes) cannot hold it: then the slot is skipped and
+ * counted, its sequence number passed over, and 0 returned (0 too when
+ * none is due). No answer then waits behind more than one of them. */
 size_t server_stream_next(vs_server_t *s, bool busy, size_t room, uint8_t *out, size_t cap);
 /* After a poll, for a main that sleeps in poll(2) between polls: bytes that
  * wait for the port to take them (wait for POLLOUT), whether the service
