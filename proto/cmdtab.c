@@ -28,6 +28,9 @@ enum {
 #define CMD_HELP(h) , h
 #endif
 
+/* A row whose IDL list is its fields' (commands.def). */
+#define CMD_IDL_FLAT NULL
+
 const cmd_def_t cmd_table[CMD_COUNT] = {
 #define VS_CMD(name, op, it, in, ot, on, idl, help)                                                \
 	{#name, op, (uint8_t)(sizeof(it) - 1), (uint8_t)(sizeof(ot) - 1), it, in,                  \

@@ -59,7 +59,9 @@ typedef struct {
 	const char *in_names; /* space-separated field names */
 	const char *out_types;
 	const char *out_names;
-	const char *idl; /* the IDL's parameter list: "in double x_" */
+	const char *idl; /* the IDL's parameter list with structs whole ("in
+			  * Point cruisePoint"); NULL where it is the fields'
+			  * own ("in double x_"), which $help writes */
 #ifndef VS_NO_HELP_TEXT
 	const char *help;
 #endif

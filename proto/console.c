@@ -359,6 +359,26 @@ static bool exec_jerk(console_t *c, char **argv, unsigned ntok, rbuf_t *r)
 	return true;
 }
 
+/* A row's IDL parameter list from its fields, where they are the IDL's
+ * (commands.def: CMD_IDL_FLAT): "in double x_, out short state". */
+static void rb_idl_flat(rbuf_t *r, const cmd_def_t *d)
+{
+	const char *sep = "";
+
+	for (int out = 0; out < 2; out++) {
+		const char *p = out ? d->out_names : d->in_names;
+
+		for (const char *t = out ? d->out_types : d->in_types; *t; t++) {
+			size_t n = strcspn(p, " ");
+
+			rb_printf(r, "%s%s %s %.*s", sep, out ? "out" : "in", cmd_type_idl(*t),
+				  (int)n, p);
+			p += n + (p[n] == ' ');
+			sep = ", ";
+		}
+	}
+}
+
 static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_t *r,
 		       cmd_scratch_t *scratch)
 {
@@ -380,7 +400,12 @@ static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_
 				return reply_error(c, r, "%d $help: no operation %s",
 						   CONSOLE_E_EXTRA, argv[1]);
 			/* The IDL's own signature, structs whole. */
-			rb_printf(r, "ok %u boolean %s(%s)", d->opcode, d->name, d->idl);
+			rb_printf(r, "ok %u boolean %s(", d->opcode, d->name);
+			if (d->idl)
+				rb_puts(r, d->idl);
+			else
+				rb_idl_flat(r, d);
+			rb_puts(r, ")");
 #ifndef VS_NO_HELP_TEXT
 			if (d->help[0])
 				rb_printf(r, ": %s", d->help);
