@@ -143,7 +143,7 @@ static bool in_range(vs_real_t x, vs_real_t lo, vs_real_t hi)
 }
 
 /* 0 < x <= hi (NaN fails). */
-static bool positive_upto(vs_real_t x, vs_real_t hi)
+FX_HELPER bool positive_upto(vs_real_t x, vs_real_t hi)
 {
 	return x > 0 && x <= hi;
 }

@@ -161,7 +161,7 @@ bool vs_getVersion(vehicle_t *v, const char **ver)
 	return true;
 }
 
-static const vs_io_def_t *find_io(const vehicle_t *v, uint32_t ioid, unsigned *index)
+FX_HELPER const vs_io_def_t *find_io(const vehicle_t *v, uint32_t ioid, unsigned *index)
 {
 	if (ioid == 0)
 		return NULL;

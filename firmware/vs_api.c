@@ -30,7 +30,7 @@ FX_HELPER bool within(vs_real_t x, vs_real_t lim)
 #define to_q32(x)   (x)
 #define from_q32(x) (x)
 /* round(x * scale) for 0 <= x * scale < 2^31 */
-static int64_t scaled(vs_real_t x, uint32_t scale)
+FX_HELPER int64_t scaled(vs_real_t x, uint32_t scale)
 {
 	return (x * scale + (INT64_C(1) << 31)) >> 32;
 }
@@ -87,7 +87,7 @@ static bool hal_complete(const vs_hal_t *hal, const vs_config_t *c)
 	return true;
 }
 
-static uint32_t ms_to_ticks(uint32_t ms, uint32_t tick_hz)
+FX_HELPER uint32_t ms_to_ticks(uint32_t ms, uint32_t tick_hz)
 {
 	uint32_t t = (uint32_t)(((uint64_t)ms * tick_hz + 999u) / 1000u);
 	return t ? t : 1u;
@@ -284,7 +284,7 @@ bool vs_getPosition(vehicle_t *v, vs_position_t *pos)
 /* ---- settings --------------------------------------------------------- */
 
 /* 0 < x <= limit, finite; 110 when not a number, 111 otherwise. */
-static uint32_t check_setting(vs_real_t x, vs_real_t limit)
+FX_HELPER uint32_t check_setting(vs_real_t x, vs_real_t limit)
 {
 	if (!vs_real_finite(x))
 		return ALM_W_BAD_ARGUMENT;
