@@ -39,18 +39,20 @@ uint32_t wire_get_u32(const uint8_t *p)
 	return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
 }
 
-static void put_u64(uint8_t *p, uint64_t v)
+/* The n low bytes of v, little-endian. */
+static void put_u64(uint8_t *p, uint64_t v, unsigned n)
 {
-	for (int i = 0; i < 8; i++)
-		p[i] = (uint8_t)((v >> (8 * i)) & 0xFFu);
+	for (unsigned i = 0; i < n; i++, v >>= 8)
+		p[i] = (uint8_t)(v & 0xFFu);
 }
 
-static uint64_t get_u64(const uint8_t *p)
+/* n bytes, little-endian. */
+static uint64_t get_u64(const uint8_t *p, unsigned n)
 {
 	uint64_t v = 0;
 
-	for (int i = 7; i >= 0; i--)
-		v = v << 8 | p[i];
+	while (n--)
+		v = v << 8 | p[n];
 	return v;
 }
 
@@ -81,39 +83,51 @@ static int put_str(wout_t *o, const char *s, size_t max)
 	return WIRE_ST_OK;
 }
 
-static int put_value(wout_t *o, char type, const cmd_value_t *v)
+/* The bytes of a scalar type on the wire; 0 for a string or a sequence. */
+static unsigned scalar_size(char type)
 {
-	uint64_t bits;
-
 	switch (type) {
 	case CMD_T_BOOL:
-		if (!room(o, 1))
-			return WIRE_ST_SPACE;
-		o->buf[o->len++] = v->b ? 1 : 0;
-		return WIRE_ST_OK;
+		return 1;
 	case CMD_T_SHORT:
-		if (!room(o, 2))
-			return WIRE_ST_SPACE;
-		wire_put_u16(o->buf + o->len, (uint16_t)v->h);
-		o->len += 2;
-		return WIRE_ST_OK;
+		return 2;
 	case CMD_T_ULONG:
-		if (!room(o, 4))
-			return WIRE_ST_SPACE;
-		wire_put_u32(o->buf + o->len, v->u);
-		o->len += 4;
-		return WIRE_ST_OK;
+		return 4;
 	case CMD_T_DOUBLE:
-		if (!room(o, 8))
+		return 8;
+	default:
+		return 0;
+	}
+}
+
+static int put_value(wout_t *o, char type, const cmd_value_t *v)
+{
+	unsigned sz = scalar_size(type);
+
+	if (sz) {
+		/* Every scalar little-endian in its sz bytes: one store loop
+		 * (a board's flash). */
+		uint64_t bits;
+
+		if (!room(o, sz))
 			return WIRE_ST_SPACE;
+		if (type == CMD_T_BOOL)
+			bits = v->b ? 1 : 0;
+		else if (type == CMD_T_SHORT)
+			bits = (uint16_t)v->h;
+		else if (type == CMD_T_ULONG)
+			bits = v->u;
+		else
 #ifdef VS_REAL_Q32
-		bits = np_q32_to_ieee(v->d);
+			bits = np_q32_to_ieee(v->d);
 #else
-		memcpy(&bits, &v->d, sizeof(bits));
+			memcpy(&bits, &v->d, sizeof(bits));
 #endif
-		put_u64(o->buf + o->len, bits);
-		o->len += 8;
+		put_u64(o->buf + o->len, bits, sz);
+		o->len += sz;
 		return WIRE_ST_OK;
+	}
+	switch (type) {
 	case CMD_T_STRING:
 		return put_str(o, v->s, WIRE_STR_MAX);
 	case CMD_T_ALARMS: {
@@ -195,39 +209,33 @@ static int get_str(win_t *in, char *dst, size_t max)
 
 static int get_value(win_t *in, char type, cmd_value_t *v, unsigned field, wire_store_t *st)
 {
-	uint64_t bits;
+	unsigned sz = scalar_size(type);
 
-	switch (type) {
-	case CMD_T_BOOL:
-		if (!avail(in, 1))
+	if (sz) {
+		uint64_t bits;
+
+		if (!avail(in, sz))
 			return WIRE_ST_LENGTH;
-		if (in->buf[in->pos] > 1)
-			return WIRE_ST_VALUE;
-		v->b = in->buf[in->pos++] == 1;
-		return WIRE_ST_OK;
-	case CMD_T_SHORT:
-		if (!avail(in, 2))
-			return WIRE_ST_LENGTH;
-		v->h = (int16_t)wire_get_u16(in->buf + in->pos);
-		in->pos += 2;
-		return WIRE_ST_OK;
-	case CMD_T_ULONG:
-		if (!avail(in, 4))
-			return WIRE_ST_LENGTH;
-		v->u = wire_get_u32(in->buf + in->pos);
-		in->pos += 4;
-		return WIRE_ST_OK;
-	case CMD_T_DOUBLE:
-		if (!avail(in, 8))
-			return WIRE_ST_LENGTH;
-		bits = get_u64(in->buf + in->pos);
+		bits = get_u64(in->buf + in->pos, sz);
+		if (type == CMD_T_BOOL) {
+			if (bits > 1)
+				return WIRE_ST_VALUE;
+			v->b = bits == 1;
+		} else if (type == CMD_T_SHORT) {
+			v->h = (int16_t)(uint16_t)bits;
+		} else if (type == CMD_T_ULONG) {
+			v->u = (uint32_t)bits;
+		} else {
 #ifdef VS_REAL_Q32
-		v->d = np_q32_from_ieee(bits);
+			v->d = np_q32_from_ieee(bits);
 #else
-		memcpy(&v->d, &bits, sizeof(bits));
+			memcpy(&v->d, &bits, sizeof(bits));
 #endif
-		in->pos += 8;
+		}
+		in->pos += sz;
 		return WIRE_ST_OK;
+	}
+	switch (type) {
 	case CMD_T_STRING: {
 		int r;
 
