@@ -241,6 +241,12 @@ static int report(const char **name, const char *field, int code)
 	return code;
 }
 
+/* Row row's value, a real row's (a single element). */
+static vs_real_t real_at(const vs_config_t *c, unsigned row)
+{
+	return *(const vs_real_t *)(const void *)((const char *)c + vs_config_fields[row].off);
+}
+
 /* The rules between fields, each in its place in the order of the rows: a
  * rule "at" row m (bad >= ROW(m)) is judged before m's own range, which it
  * covers; one "after" m (bad > ROW(m)) once m is in range. bad is the first
@@ -249,34 +255,39 @@ static int report(const char **name, const char *field, int code)
  * field, or 0. */
 static int cross_rules(const vs_config_t *c, unsigned bad, const char **name)
 {
+	/* Row x against row lim (0: none, row 0 being the kinematics), in the
+	 * order the rules are judged; a jerk's rule is "after" its row, a
+	 * default's "at" it. */
+	static const struct {
+		uint8_t row, lim_row;
+		bool jerk;
+	} pairs[] = {
+	    {ROW(vel_default_t_mm_s), ROW(vel_limit_t_mm_s), false},
+	    {ROW(vel_default_r_deg_s), ROW(vel_limit_r_deg_s), false},
+	    {ROW(acc_default_t_mm_s2), ROW(acc_limit_t_mm_s2), false},
+	    {ROW(acc_default_r_deg_s2), ROW(acc_limit_r_deg_s2), false},
+	    {ROW(jerk_limit_t_mm_s3), 0, true},
+	    {ROW(jerk_limit_r_deg_s3), 0, true},
+	    {ROW(jerk_default_t_mm_s3), ROW(jerk_limit_t_mm_s3), true},
+	    {ROW(jerk_default_r_deg_s3), ROW(jerk_limit_r_deg_s3), true},
+	};
 #ifdef VS_KIN_ONLY
 	if (c->kinematics != VS_KIN_ONLY) /* built for the other base (the first row) */
 		return report(name, "kinematics", -1);
 #endif
 	if (bad > ROW(wheel_base_mm) && vs_config_omni(c) && !(c->wheel_base_mm >= VS_REAL(50.0)))
 		return report(name, "wheel_base_mm", -1);
-	if (bad >= ROW(vel_default_t_mm_s) &&
-	    !positive_upto(c->vel_default_t_mm_s, c->vel_limit_t_mm_s))
-		return report(name, "vel_default_t_mm_s", -2);
-	if (bad >= ROW(vel_default_r_deg_s) &&
-	    !positive_upto(c->vel_default_r_deg_s, c->vel_limit_r_deg_s))
-		return report(name, "vel_default_r_deg_s", -2);
-	if (bad >= ROW(acc_default_t_mm_s2) &&
-	    !positive_upto(c->acc_default_t_mm_s2, c->acc_limit_t_mm_s2))
-		return report(name, "acc_default_t_mm_s2", -2);
-	if (bad >= ROW(acc_default_r_deg_s2) &&
-	    !positive_upto(c->acc_default_r_deg_s2, c->acc_limit_r_deg_s2))
-		return report(name, "acc_default_r_deg_s2", -2);
-	if (bad > ROW(jerk_limit_t_mm_s3) && !vs_jerk_fits(c, c->jerk_limit_t_mm_s3, 0))
-		return report(name, "jerk_limit_t_mm_s3", -2);
-	if (bad > ROW(jerk_limit_r_deg_s3) && !vs_jerk_fits(c, c->jerk_limit_r_deg_s3, 0))
-		return report(name, "jerk_limit_r_deg_s3", -2);
-	if (bad > ROW(jerk_default_t_mm_s3) &&
-	    !vs_jerk_fits(c, c->jerk_default_t_mm_s3, c->jerk_limit_t_mm_s3))
-		return report(name, "jerk_default_t_mm_s3", -2);
-	if (bad > ROW(jerk_default_r_deg_s3) &&
-	    !vs_jerk_fits(c, c->jerk_default_r_deg_s3, c->jerk_limit_r_deg_s3))
-		return report(name, "jerk_default_r_deg_s3", -2);
+	/* The defaults within their limits, the jerks held by the tick rate:
+	 * one table, one loop (0.1 KiB of a board's flash). */
+	for (unsigned i = 0; i < sizeof pairs / sizeof pairs[0]; i++) {
+		unsigned row = pairs[i].row;
+		if (bad < row + pairs[i].jerk)
+			continue;
+		vs_real_t x = real_at(c, row),
+			  lim = pairs[i].lim_row ? real_at(c, pairs[i].lim_row) : 0;
+		if (!(pairs[i].jerk ? vs_jerk_fits(c, x, lim) : positive_upto(x, lim)))
+			return report(name, vs_config_fields[row].name, -2);
+	}
 	/* Per-tick loop gain at most 1/4 keeps the discrete loop well damped. */
 	if (bad > ROW(wheel_kp_per_s) && c->wheel_kp_per_s > vs_real_int(c->tick_hz) / 4)
 		return report(name, "wheel_kp_per_s", -2);
