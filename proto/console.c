@@ -78,17 +78,17 @@ __attribute__((format(printf, 2, 3))) static void rb_printf(rbuf_t *r, const cha
 	va_end(ap);
 }
 
-/* Exactly three decimals; a value that rounds to zero prints as 0.000, never
- * -0.000. */
+const char *console_real3(vs_real_t v, char *tmp)
+{
+	np_fmt_real3(v, tmp);
+	return strcmp(tmp, "-0.000") == 0 ? "0.000" : tmp;
+}
+
 static void rb_real(rbuf_t *r, vs_real_t v)
 {
 	char tmp[NP_FIXED3_MAX];
 
-	np_fmt_real3(v, tmp);
-	if (strcmp(tmp, "-0.000") == 0)
-		rb_puts(r, "0.000");
-	else
-		rb_puts(r, tmp);
+	rb_puts(r, console_real3(v, tmp));
 }
 
 static bool needs_hex(unsigned char b)
@@ -318,11 +318,15 @@ static const char *mode_name(uint8_t m)
 
 static void rb_q32(rbuf_t *r, q32_t v)
 {
+	rb_puts(r, " ");
+#ifdef VS_REAL_Q32
+	rb_real(r, v); /* the same number: one copy of the formatting */
+#else
 	char tmp[NP_FIXED3_MAX];
 
-	rb_puts(r, " ");
 	np_fmt_q32_fixed3(v, tmp);
 	rb_puts(r, strcmp(tmp, "-0.000") == 0 ? "0.000" : tmp);
+#endif
 }
 
 static void rb_pose(rbuf_t *r, const fx_pose_t *p)
@@ -445,10 +449,11 @@ static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_
 	}
 	if (np_streq_nocase(cmd, "$jerk"))
 		return exec_jerk(c, argv, ntok, r);
-	if (np_streq_nocase(cmd, "$version") || np_streq_nocase(cmd, "$diag")) {
+	bool version = np_streq_nocase(cmd, "$version");
+	if (version || np_streq_nocase(cmd, "$diag")) {
 		if (ntok != 1)
 			return reply_arity(c, r, cmd, "0 arguments", ntok);
-		if (np_streq_nocase(cmd, "$version")) {
+		if (version) {
 			const char *fw = "", *ifv = "";
 
 			vs_getVersion(c->v, &fw);

@@ -71,6 +71,10 @@ void console_config_store(const struct cfgkeep *k, char *buf, size_t cap);
 /* $diag's tail: " config store ..." when the store at start was written by
  * another table or did not read; empty otherwise. */
 void console_config_diag(const console_t *c, char *buf, size_t cap);
+/* A real as the console writes it, exactly three decimals, a value that
+ * rounds to zero as 0.000, never -0.000: in tmp (NP_FIXED3_MAX bytes,
+ * numparse.h) or a constant. */
+const char *console_real3(vs_real_t v, char *tmp);
 /* Feed received bytes; replies are written as whole lines ending in "\n". */
 void console_feed(console_t *c, const uint8_t *data, size_t n);
 /* The same two as the frame receiver's sinks (frame_other_fn, frame_hold_fn

@@ -83,8 +83,7 @@ static void put_values(out_t *o, const void *c, const vs_config_field_t *f)
 		char tmp[NP_FIXED3_MAX];
 		switch (f->type) {
 		case VS_CFG_DOUBLE:
-			np_fmt_real3(((const vs_real_t *)(const void *)p)[k], tmp);
-			put(o, " %s", strcmp(tmp, "-0.000") == 0 ? "0.000" : tmp);
+			put(o, " %s", console_real3(((const vs_real_t *)(const void *)p)[k], tmp));
 			break;
 		case VS_CFG_U32:
 			put(o, " %lu", (unsigned long)((const uint32_t *)(const void *)p)[k]);
