@@ -78,12 +78,6 @@ __attribute__((format(printf, 2, 3))) static void rb_printf(rbuf_t *r, const cha
 	va_end(ap);
 }
 
-const char *console_real3(vs_real_t v, char *tmp)
-{
-	np_fmt_real3(v, tmp);
-	return strcmp(tmp, "-0.000") == 0 ? "0.000" : tmp;
-}
-
 static void rb_real(rbuf_t *r, vs_real_t v)
 {
 	char tmp[NP_FIXED3_MAX];

@@ -26,6 +26,13 @@ void console_set_keep(console_t *c, struct cfgkeep *keep)
 	c->keep = keep;
 }
 
+/* Here, not in console.c, which calls this file: no cycle between them. */
+const char *console_real3(vs_real_t v, char *tmp)
+{
+	np_fmt_real3(v, tmp);
+	return strcmp(tmp, "-0.000") == 0 ? "0.000" : tmp;
+}
+
 #ifndef VS_NO_CONFIG_EXTRA
 /* "ok" and " NAME" for every row of the configuration table: the list of
  * $config fits one reply (a char per byte of " NAME", as the NUL of #m). */
