@@ -6,6 +6,10 @@
  * The unit side runs in a thread: the link polled and the simulated plant
  * ticked in lockstep (1 ms of simulated time per loop), so the tests never
  * depend on wall-clock speed except for the frame inter-byte timeout.
+ * While a stream is subscribed, the unit's time also waits for the host to
+ * have read all it sent: a unit running ahead of a host that is not
+ * scheduled would have the client keep more samples than it holds
+ * (STREAM_KEEP) while it waits for an answer, and lose the oldest.
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -24,6 +28,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/ioctl.h>
+#include <sys/ioctl.h>
 #include <sys/wait.h>
 #include <termios.h>
 #include <time.h>
@@ -57,11 +63,28 @@ static size_t m_read(void *ctx, uint8_t *b, size_t n)
 	return r > 0 ? (size_t)r : 0;
 }
 
-static size_t m_write(void *ctx, const uint8_t *b, size_t n)
-{
-	ssize_t r = write(*(int *)ctx, b, n);
+/* The unit thread's port: what a poll sent, written after it in one go. */
+static uint8_t OUT[2048];
+static size_t OUT_N;
 
-	return r > 0 ? (size_t)r : 0;
+static size_t u_write(void *ctx, const uint8_t *b, size_t n)
+{
+	(void)ctx;
+	if (n > sizeof(OUT) - OUT_N)
+		n = sizeof(OUT) - OUT_N;
+	memcpy(OUT + OUT_N, b, n);
+	OUT_N += n;
+	return n;
+}
+
+static void u_flush(void)
+{
+	ssize_t r = OUT_N ? write(MASTER, OUT, OUT_N) : 0;
+
+	if (r > 0) {
+		OUT_N -= (size_t)r;
+		memmove(OUT, OUT + r, OUT_N);
+	}
 }
 
 /* Set, the unit's link clock stands still (no frame times out): a test
@@ -73,9 +96,14 @@ static void *unit_thread(void *arg)
 {
 	(void)arg;
 	while (RUN) {
+		int unread = 0;
+
 		pthread_mutex_lock(&MU);
 		server_poll(&S.srv, FROZEN ? FROZEN_US : (uint32_t)(mono_ms() * 1000u));
-		sim_tick(&S);
+		u_flush();
+		if (!SER.sub.mask ||
+		    (OUT_N == 0 && ioctl(SLAVE, FIONREAD, &unread) == 0 && unread == 0))
+			sim_tick(&S);
 		pthread_mutex_unlock(&MU);
 		usleep(100);
 	}
@@ -86,10 +114,11 @@ static int setup(void **state)
 {
 	vs_config_t cfg;
 	plant_params_t pp;
-	vs_link_t io = {m_read, m_write, &MASTER};
+	vs_link_t io = {m_read, u_write, &MASTER};
 
 	(void)state;
 	FROZEN = 0;
+	OUT_N = 0;
 	vs_config_defaults(&cfg);
 	/* Time passes in lockstep waits with no request; the link watchdog
 	 * has its own tests. */
@@ -164,7 +193,8 @@ static void host_flood(const void *p, size_t n)
 
 /* Reads and discards what the unit answers for at least ms, and until the
  * unit has taken every byte written (a poll of its ended with the port
- * empty) and sent every answer. */
+ * empty), holds no unfinished frame (whose NAK would come after its
+ * inter-byte timeout, in host time) and sent every answer. */
 static void host_settle(unsigned ms)
 {
 	uint8_t junk[4096];
@@ -183,7 +213,8 @@ static void host_settle(unsigned ms)
 		/* a poll that began after the last byte was written */
 		pthread_mutex_lock(&MU);
 		done = SER.st.polls - polls0 >= 2 && SER.in_at == SER.in_len && !SER.more &&
-		       !SER.blocked && SER.q_len == 0;
+		       !SER.blocked && SER.q_len == 0 && OUT_N == 0 &&
+		       !frame_rx_busy(&S.srv.serial.fs.rx);
 		pthread_mutex_unlock(&MU);
 	}
 }

@@ -187,7 +187,10 @@ static int exchange_once(serial_t *s, unsigned opcode, const uint8_t *req, size_
 			s->stats->retries++;
 		s->done = false;
 		s->crc_seen = false;
-		s->rx.n = 0; /* forget a half-received answer of the last attempt */
+		/* forget a half-received answer of the last attempt (not a stream
+		 * frame half read before the first: its sample would be lost) */
+		if (attempt)
+			s->rx.n = 0;
 		e = vcio_write_all(s->fd, frame, flen, timeout_ms);
 		if (e == VC_E_LINK)
 			return e;
