@@ -491,7 +491,7 @@ static void test_off_frame(void **state)
 	/* polarity reverse: the speed written and the position read negated */
 	mbd_set_velocity(&b, 1, -256 * 500);
 	assert_int_equal(b.d[1].cmd_cps, 500);
-	b.d[1].pos = 77;
+	b.d[1].s.pos = 77;
 	hal_drive_state_t st;
 	mbd_read(&b, 1, &st);
 	assert_int_equal(st.position_counts, -77);

@@ -225,7 +225,7 @@ vs_hal_t plant_hal(const vs_config_t *cfg)
 	systick_init(cfg->tick_hz);
 	uint32_t t0 = now_us();
 	for (unsigned i = 0; i < MB_DRIVES && now_us() - t0 < MB_START_US;)
-		if (plant_bus.d[i].sampled)
+		if (plant_bus.d[i].s.sampled)
 			i++;
 		else
 			mbd_poll(&plant_bus, now_us());

@@ -193,61 +193,26 @@ static bool enable_wanted(const mb_bus_t *b, const mb_drive_t *d)
 	return true;
 }
 
-typedef struct {
-	uint8_t r;
-	uint8_t n;
-	bool input;
-	uint16_t addr;
-} rd_item_t;
-
-/* Position, status and alarm of drive d, in as few reads as the profile's
- * block allows (reads never mix holding and input registers). */
-static int read_sample(mb_bus_t *b, const mb_drive_t *d, int32_t *pos, uint16_t *st, uint16_t *al)
+/* Position, status and alarm of drive d into val, in as few reads as the
+ * profile's block allows (mbp_read_plan). */
+static int read_sample(mb_bus_t *b, const mb_drive_t *d, uint16_t val[MBP_REG_COUNT][2])
 {
 	const mb_profile_t *p = &b->cfg.prof;
-	rd_item_t it[3] = {{0, 0, false, 0}};
-	unsigned n = 0;
-	static const uint8_t regs[3] = {MBP_POSITION, MBP_STATUS, MBP_ALARM};
-	for (unsigned k = 0; k < 3; k++) {
-		const mbp_reg_t *g = &p->reg[regs[k]];
-		if (!g->words)
-			continue;
-		rd_item_t x = {regs[k], g->words, (g->flags & MBP_INPUT) != 0, mbp_addr(g, d->ch)};
-		unsigned j = n++;
-		/* sorted by (area, address) */
-		while (j > 0 && (it[j - 1].input > x.input ||
-				 (it[j - 1].input == x.input && it[j - 1].addr > x.addr))) {
-			it[j] = it[j - 1];
-			j--;
-		}
-		it[j] = x;
-	}
-	uint16_t val[MBP_REG_COUNT][2] = {{0}};
-	for (unsigned i = 0; i < n;) {
-		unsigned j = i, end = it[i].addr + it[i].n;
-		while (j + 1 < n && it[j + 1].input == it[i].input &&
-		       it[j + 1].addr + it[j + 1].n - it[i].addr <= p->block) {
-			j++;
-			end = it[j].addr + it[j].n > end ? it[j].addr + it[j].n : end;
-		}
+	mbp_read_t rd[3];
+	unsigned n = mbp_read_plan(p, d->ch, BLOCK_MAX, rd);
+	for (unsigned i = 0; i < n; i++) {
 		uint16_t blk[BLOCK_MAX];
-		int x = xfer(b, d->unit, it[i].input ? RD_INPUT : RD_HOLDING, it[i].addr,
-			     (int)(end - it[i].addr), blk);
+		int x =
+		    xfer(b, d->unit, rd[i].input ? RD_INPUT : RD_HOLDING, rd[i].addr, rd[i].n, blk);
 		if (x != XF_OK)
 			return x;
-		for (unsigned k = i; k <= j; k++)
-			for (unsigned w = 0; w < it[k].n; w++)
-				val[it[k].r][w] = blk[it[k].addr - it[i].addr + w];
-		i = j + 1;
+		mbp_take_read(p, d->ch, &rd[i], blk, val);
 	}
-	*pos = mbp_get(&p->reg[MBP_POSITION], val[MBP_POSITION]);
-	*st = val[MBP_STATUS][0];
-	*al = (uint16_t)mbp_get(&p->reg[MBP_ALARM], val[MBP_ALARM]);
 	return XF_OK;
 }
 
 /* The cycle's requests up to the sample; XF_OK or how it failed. */
-static int cycle_requests(mb_bus_t *b, mb_drive_t *d, int32_t *pos, uint16_t *st, uint16_t *al)
+static int cycle_requests(mb_bus_t *b, mb_drive_t *d, uint16_t val[MBP_REG_COUNT][2])
 {
 	const mb_profile_t *p = &b->cfg.prof;
 	int32_t cps;
@@ -255,7 +220,7 @@ static int cycle_requests(mb_bus_t *b, mb_drive_t *d, int32_t *pos, uint16_t *st
 	uint32_t reset;
 	pthread_mutex_lock(&b->mu);
 	/* a speed only to a stage that is on: it starts from 0, not a step */
-	cps = d->cmd_enable && mbp_enabled(p, d->status) ? d->cmd_cps : 0;
+	cps = d->cmd_enable && mbp_enabled(p, d->s.status) ? d->cmd_cps : 0;
 	en = enable_wanted(b, d);
 	reset = d->reset_req;
 	pthread_mutex_unlock(&b->mu);
@@ -282,7 +247,7 @@ static int cycle_requests(mb_bus_t *b, mb_drive_t *d, int32_t *pos, uint16_t *st
 	uint16_t sp[2];
 	mbp_speed_words(p, cps, sp);
 	x = write_reg(b, d, MBP_SPEED, sp);
-	return x != XF_OK ? x : read_sample(b, d, pos, st, al);
+	return x != XF_OK ? x : read_sample(b, d, val);
 }
 
 static void cycle_drive(mb_bus_t *b, mb_drive_t *d)
@@ -293,26 +258,21 @@ static void cycle_drive(mb_bus_t *b, mb_drive_t *d)
 	/* A silent drive gets one attempt per probe. */
 	b->cur_retries = d->silent ? 0 : b->cfg.retries;
 	b->cur = d;
-	int32_t pos = 0;
-	uint16_t st = 0, al = 0;
-	int x = cycle_requests(b, d, &pos, &st, &al);
+	uint16_t val[MBP_REG_COUNT][2] = {{0}};
+	int x = cycle_requests(b, d, val);
 	b->cur = NULL;
 	pthread_mutex_lock(&b->mu);
 	if (x == XF_OK) {
-		d->pos = pos;
-		d->status = st;
-		d->alarm = al;
-		d->fresh = true;
-		d->sampled = true;
+		mbp_sample_set(&b->cfg.prof, &d->s, val);
 		d->silent = false;
 		d->map_logged = false;
 	} else {
 		d->failures++;
 		/* A drive that answers (busy, an exception) is asked again in
 		 * the next cycle: it costs the bus little. */
-		d->why = x == XF_BUSY  ? HAL_SILENT_BUSY
-			 : x == XF_MAP ? HAL_SILENT_MAP
-				       : HAL_SILENT_NO_REPLY;
+		d->s.why = x == XF_BUSY	 ? HAL_SILENT_BUSY
+			   : x == XF_MAP ? HAL_SILENT_MAP
+					 : HAL_SILENT_NO_REPLY;
 		if (x == XF_NO_REPLY) {
 			d->silent = true;
 			d->setup_done = false; /* it may have restarted: set it up again */
@@ -504,19 +464,8 @@ void mb_drive_reset_fault(mb_bus_t *b, unsigned i)
 
 void mb_drive_read(mb_bus_t *b, unsigned i, hal_drive_state_t *st)
 {
-	mb_drive_t *d = &b->d[i];
 	pthread_mutex_lock(&b->mu);
-	st->position_counts = d->reverse ? (int32_t)(0u - (uint32_t)d->pos) : d->pos;
-	st->fault_code = d->alarm;
-	st->enabled = mbp_enabled(&b->cfg.prof, d->status);
-	st->phase = !d->sampled	  ? HAL_DRIVE_UNKNOWN
-		    : d->alarm	  ? HAL_DRIVE_FAULT
-		    : st->enabled ? HAL_DRIVE_ENABLED
-				  : HAL_DRIVE_READY;
-	st->position_lost = false;
-	st->fresh = d->fresh;
-	st->silent_why = d->fresh ? HAL_SILENT_NO_REPLY : d->why;
-	d->fresh = false;
+	mbp_report(&b->cfg.prof, &b->d[i].s, b->d[i].reverse, st);
 	pthread_mutex_unlock(&b->mu);
 }
 

@@ -64,6 +64,7 @@
 #include <stdint.h>
 
 #include "../hal.h"
+#include "../modbus/mbprofile.h"
 #include "backend_cfg.h"
 
 /* What went wrong on a bus or with one drive (bus thread, read under mu). */
@@ -85,11 +86,7 @@ typedef struct {
 	bool cmd_enable;
 	uint32_t reset_req;
 	/* bus -> tick */
-	int32_t pos;
-	uint16_t status, alarm;
-	bool fresh;
-	bool sampled;	   /* one read succeeded since start */
-	uint8_t why;	   /* HAL_SILENT_* of the last failed cycle */
+	mbp_sample_t s;
 	uint32_t failures; /* cycles whose reads failed */
 	mb_count_t cnt;
 	/* bus thread only */

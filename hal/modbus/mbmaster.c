@@ -344,7 +344,7 @@ static bool issue(mbd_bus_t *b, mbd_drive_t *d)
 		}
 		case DS_SPEED: {
 			/* a speed only to a stage that is on: it starts from 0 */
-			int32_t cps = d->cmd_enable && mbp_enabled(p, d->status) ? d->cmd_cps : 0;
+			int32_t cps = d->cmd_enable && mbp_enabled(p, d->s.status) ? d->cmd_cps : 0;
 			uint16_t w[2];
 			mbp_speed_words(p, cps, w);
 			const mbp_reg_t *g = &p->reg[MBP_SPEED];
@@ -384,8 +384,7 @@ static void step_done(mbd_bus_t *b, mbd_drive_t *d)
 		uint16_t regs[MBM_READ_MAX];
 		for (unsigned i = 0; i < b->rd[b->sub].n; i++)
 			regs[i] = mbm_reg(&b->m, i);
-		for (unsigned r = MBP_POSITION; r <= MBP_ALARM; r++)
-			mbp_from_read(b->prof, r, d->ch, &b->rd[b->sub], regs, b->val[r]);
+		mbp_take_read(b->prof, d->ch, &b->rd[b->sub], regs, b->val);
 		b->sub++;
 		break;
 	}
@@ -403,9 +402,9 @@ static bool step_failed(mbd_bus_t *b, mbd_drive_t *d, uint8_t r, uint32_t now_us
 	}
 	uint8_t exc = r == MBM_EXCEPTION ? b->m.exc : 0;
 	d->failures++;
-	d->why = exc == 6		? HAL_SILENT_BUSY
-		 : exc == 1 || exc == 2 ? HAL_SILENT_MAP
-					: HAL_SILENT_NO_REPLY;
+	d->s.why = exc == 6		  ? HAL_SILENT_BUSY
+		   : exc == 1 || exc == 2 ? HAL_SILENT_MAP
+					  : HAL_SILENT_NO_REPLY;
 	d->silent = r != MBM_EXCEPTION; /* an exception: it answers */
 	if (d->silent) {
 		/* nothing usable: probed from now on; it may have restarted */
@@ -417,13 +416,7 @@ static bool step_failed(mbd_bus_t *b, mbd_drive_t *d, uint8_t r, uint32_t now_us
 
 static void publish(mbd_bus_t *b, mbd_drive_t *d, uint32_t now_us)
 {
-	const mb_profile_t *p = b->prof;
-	d->pos = mbp_get(&p->reg[MBP_POSITION], b->val[MBP_POSITION]);
-	d->status = b->val[MBP_STATUS][0];
-	d->alarm =
-	    p->reg[MBP_ALARM].words ? (uint16_t)mbp_get(&p->reg[MBP_ALARM], b->val[MBP_ALARM]) : 0;
-	d->fresh = true;
-	d->sampled = true;
+	mbp_sample_set(b->prof, &d->s, b->val);
 	d->silent = false;
 	d->last_ok_us = now_us;
 	d->samples++;
@@ -497,18 +490,7 @@ void mbd_reset_fault(void *ctx, uint8_t axis)
 void mbd_read(void *ctx, uint8_t axis, hal_drive_state_t *st)
 {
 	mbd_bus_t *b = ctx;
-	mbd_drive_t *d = &b->d[axis];
-	st->position_counts = d->reverse ? (int32_t)(0u - (uint32_t)d->pos) : d->pos;
-	st->fault_code = d->alarm;
-	st->enabled = mbp_enabled(b->prof, d->status);
-	st->phase = !d->sampled	  ? HAL_DRIVE_UNKNOWN
-		    : d->alarm	  ? HAL_DRIVE_FAULT
-		    : st->enabled ? HAL_DRIVE_ENABLED
-				  : HAL_DRIVE_READY;
-	st->position_lost = false;
-	st->fresh = d->fresh;
-	st->silent_why = (uint8_t)(d->fresh ? HAL_SILENT_NO_REPLY : d->why & 3u);
-	d->fresh = false;
+	mbp_report(b->prof, &b->d[axis].s, b->d[axis].reverse, st);
 }
 
 size_t mbd_off_frame(const mbd_bus_t *b, unsigned i, uint8_t *f)

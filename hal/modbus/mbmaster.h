@@ -133,10 +133,7 @@ typedef struct {
 	bool cmd_enable;
 	uint8_t reset_req;
 	/* bus -> tick */
-	int32_t pos;
-	uint16_t status, alarm;
-	bool fresh, sampled;
-	uint8_t why; /* HAL_SILENT_* of the last failed cycle */
+	mbp_sample_t s;
 	/* bus only */
 	bool silent, setup_done, enable_ok, enable_sent;
 	uint8_t reset_done;

@@ -422,3 +422,35 @@ bool mbp_from_read(const mb_profile_t *p, unsigned r, unsigned ch, const mbp_rea
 		w[k] = regs[(unsigned)(a - rd->addr) + k];
 	return true;
 }
+
+void mbp_take_read(const mb_profile_t *p, unsigned ch, const mbp_read_t *rd, const uint16_t *regs,
+		   uint16_t val[MBP_REG_COUNT][2])
+{
+	for (unsigned k = 0; k < 3; k++)
+		mbp_from_read(p, sample_regs[k], ch, rd, regs, val[sample_regs[k]]);
+}
+
+void mbp_sample_set(const mb_profile_t *p, mbp_sample_t *s, const uint16_t val[MBP_REG_COUNT][2])
+{
+	s->pos = mbp_get(&p->reg[MBP_POSITION], val[MBP_POSITION]);
+	s->status = val[MBP_STATUS][0];
+	s->alarm =
+	    p->reg[MBP_ALARM].words ? (uint16_t)mbp_get(&p->reg[MBP_ALARM], val[MBP_ALARM]) : 0;
+	s->fresh = true;
+	s->sampled = true;
+}
+
+void mbp_report(const mb_profile_t *p, mbp_sample_t *s, bool reverse, hal_drive_state_t *st)
+{
+	st->position_counts = reverse ? (int32_t)(0u - (uint32_t)s->pos) : s->pos;
+	st->fault_code = s->alarm;
+	st->enabled = mbp_enabled(p, s->status);
+	st->phase = !s->sampled	  ? HAL_DRIVE_UNKNOWN
+		    : s->alarm	  ? HAL_DRIVE_FAULT
+		    : st->enabled ? HAL_DRIVE_ENABLED
+				  : HAL_DRIVE_READY;
+	st->position_lost = false;
+	st->fresh = s->fresh;
+	st->silent_why = (uint8_t)(s->fresh ? HAL_SILENT_NO_REPLY : s->why & 3u);
+	s->fresh = false;
+}

@@ -38,6 +38,8 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "../hal.h"
+
 enum {
 	MBP_SPEED = 0,
 	MBP_POSITION,
@@ -122,6 +124,27 @@ unsigned mbp_read_plan(const mb_profile_t *p, unsigned ch, unsigned max, mbp_rea
  * not): w gets its 1 or 2 words. */
 bool mbp_from_read(const mb_profile_t *p, unsigned r, unsigned ch, const mbp_read_t *rd,
 		   const uint16_t *regs, uint16_t *w);
+
+/* The words of position, status and alarm from one read of the sample
+ * into val (by MBP_*), those the read covers. */
+void mbp_take_read(const mb_profile_t *p, unsigned ch, const mbp_read_t *rd, const uint16_t *regs,
+		   uint16_t val[MBP_REG_COUNT][2]);
+
+/* A drive's latest sample as a master keeps it for the tick (the board's
+ * hal/modbus/mbmaster.c and Linux's hal/linux/modbus_drive.c). */
+typedef struct {
+	int32_t pos;
+	uint16_t status, alarm;
+	bool fresh;   /* not yet reported */
+	bool sampled; /* one sample since start */
+	uint8_t why;  /* HAL_SILENT_* of the last failed cycle */
+} mbp_sample_t;
+
+/* A whole sample from its registers (val: mbp_take_read's). */
+void mbp_sample_set(const mb_profile_t *p, mbp_sample_t *s, const uint16_t val[MBP_REG_COUNT][2]);
+/* The tick's report of the sample (reverse: the drive's polarity); fresh
+ * once per sample. */
+void mbp_report(const mb_profile_t *p, mbp_sample_t *s, bool reverse, hal_drive_state_t *st);
 
 /* One attribute of the text form. Returns NULL, or why the value is not
  * taken (a constant string); unknown keys: "unknown". */

@@ -84,9 +84,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 			mbd_poll(&b, t += 100);
 		for (unsigned d = 0; d < b.nd; d++) {
 			hal_drive_state_t st;
-			bool had = b.d[d].fresh;
+			bool had = b.d[d].s.fresh;
 			mbd_read(&b, d, &st);
-			if (st.fresh != had || (st.fresh && !b.d[d].sampled))
+			if (st.fresh != had || (st.fresh && !b.d[d].s.sampled))
 				abort();
 		}
 	}
