@@ -12,7 +12,8 @@
 BENCH_DIR := $(BUILD)/bench
 BENCH_SECS := $(if $(filter 1,$(BENCH_QUICK)),5,60)
 BENCH_RIG := $(call objs,tools/bench/rig.c hal/cortexm/loop_hal.c)
-BENCH_PROGS := $(addprefix $(BENCH_DIR)/,tickcost accuracy parserate looplat plantbench streamcost)
+BENCH_PROGS := $(addprefix $(BENCH_DIR)/,tickcost accuracy parserate looplat plantbench streamcost \
+	drivecycle)
 
 $(BENCH_DIR)/tickcost: $(call objs,tools/bench/tickcost.c tools/bench/scenario.c) $(BENCH_RIG) \
 	$(FW_LIB)
@@ -23,6 +24,8 @@ $(BENCH_DIR)/accuracy: $(call objs,tools/bench/accuracy.c tools/ref/ref_motion.c
 	$(FW_LIB)
 $(BENCH_DIR)/parserate: $(call objs,tools/bench/parserate.c) $(BENCH_RIG) $(PROTO_LIB) $(HOST_LIB) \
 	$(FW_LIB)
+$(BENCH_DIR)/drivecycle: $(call objs,tools/bench/drivecycle.c hal/modbus/mbmaster.c \
+	hal/modbus/mbprofile.c)
 $(BENCH_DIR)/plantbench: $(call objs,tools/bench/plantbench.c tools/bench/plantmetrics.c) \
 	$(HOST_LIBS)
 $(BENCH_PROGS):

@@ -63,6 +63,11 @@ echo "  pose change from Ready to 500 ms later; following: largest reference - o
 "$dir/plantbench" | tee "$dir/plantbench.txt"
 echo
 
+echo "== 2c. the Modbus drive cycle (hal/modbus/mbmaster.h), generic profile, 8N1, every drive answering: a speed"
+echo "  write and one read per drive, 1 ms turnaround per answer (the board's figures in QEMU: tests/mcu/mcu_drives.py move) =="
+"$dir/drivecycle" | tee "$dir/drivecycle.txt"
+echo
+
 echo "== 3. parse rates (wall clock, this machine, one core) =="
 "$dir/parserate"
 echo
