@@ -34,7 +34,11 @@
  * then answers nothing), "battery answer" answers them again; "unit N
  * busy|illegal|truncate|silent|answer": unit N answers every request with
  * exception 6 (busy) or 2 (illegal data address), sends the first 3 bytes
- * of each reply and stops, answers nothing, or answers normally again.
+ * of each reply and stops, answers nothing, or answers normally again;
+ * "clock US": from now on the drives' time is the master's, US us (a board
+ * in an emulator, whose time is not the host's), advanced only by these
+ * lines (a clock that goes back, a restarted board, counts nothing) and
+ * acknowledged with the same line on stdout.
  * Prints "ready" once serving.
  */
 #include <errno.h>
@@ -147,11 +151,33 @@ static void on_signal(int sig)
 		stop = 1;
 }
 
+/* The master's clock ("clock US"): its last value and the drives' time. */
+static bool clock_given;
+static uint64_t clock_last_us, clock_us;
+
 static uint64_t mono_us(void)
 {
+	if (clock_given)
+		return clock_us;
 	struct timespec t;
 	clock_gettime(CLOCK_MONOTONIC, &t);
 	return (uint64_t)t.tv_sec * 1000000u + (uint64_t)t.tv_nsec / 1000u;
+}
+
+static bool set_clock(const char *arg)
+{
+	char *end;
+	unsigned long long us = strtoull(arg, &end, 10);
+	if (end == arg || *end)
+		return false;
+	if (!clock_given)
+		clock_us = mono_us();
+	clock_us += clock_given && us > clock_last_us ? us - clock_last_us : 0;
+	clock_last_us = us;
+	clock_given = true;
+	printf("clock %llu\n", us);
+	fflush(stdout);
+	return true;
 }
 
 static uint16_t crc16(const uint8_t *p, int n)
@@ -211,6 +237,8 @@ static long parse_mv(const char *s)
 static bool control(const char *line, unit_t *u, int nu, unit_t *bat, bool *bat_silent)
 {
 	static const char *const modes[] = {"answer", "silent", "busy", "illegal", "truncate"};
+	if (!strncmp(line, "clock ", 6))
+		return set_clock(line + 6);
 	if (!strncmp(line, "unit ", 5)) {
 		char *end;
 		long id = strtol(line + 5, &end, 10);

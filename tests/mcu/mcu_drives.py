@@ -7,20 +7,29 @@ harness relays to the drives' peer on a second pty, recording every byte
 the board sends: build/mbdrive-sim (the simulator vehicle-fw's Modbus
 backend is tested against) or tests/mcu/mb_peer.py on Debian's pymodbus.
 The console is UART0 as in mcu_test.py. The unit's time is instruction
-time (-icount shift=6,align=on); the peers answer in host time, so every
-bound here is in the board's ticks and generous against the host's
-delays, and no case waits for a host deadline.
+time (-icount shift=6,align=on). The relay (DriveBoard) stops the board at
+each request through QEMU's gdbstub, gives the peer the board's time and
+lets the board go on once the answer is in its UART: the peers' latency
+does not show in the board's time and the drives move in it. What is left
+to the host is the pace at which QEMU's I/O thread hands an answer's later
+bytes to the one-byte UART while the board runs (docs/mcu.md). No case
+waits for a host deadline.
 
 Cases:
  - move: servo on waits for both drives to report the stage on (status
    bit read over the bus), moveForward 300 ends Ready at 300 mm within the
    position window, the odometry being the drives' position registers;
-   the drive cycle's period as measured and its computed value;
+   the drive cycle's period as measured and its computed value; the
+   board's rules with the Modbus master polled: the worst tick under half
+   a 1 ms period, the worst request under one (board_cost);
  - alarm: the drive sets its alarm register (0x31): fault 201 "drive 0
    fault 0x0031";
- - silent: the second drive stops answering: 202 "drive 1 not answering",
-   exactly drive_timeout_ms (500) plus at most 2 ticks after its last
-   sample, its first failed cycle counted with exactly 1 + 2 retries;
+ - silent: the second drive stops answering: 202 "drive 1 not answering"
+   exactly drive_timeout_ms + 1 ticks after the last tick that had its
+   sample (the test image: 5000 ms, mk/cortexm.mk), whatever the bus's
+   timing; its first failed request sent exactly 1 + RETRIES (1) times,
+   TIMEOUT_MS (1000) apart, then single probes MBD_PROBE_US (200 ms) after
+   each failure, all before the 202;
  - pymodbus: the same move against pymodbus's server;
  - watchdog (test image): $hang spins the main loop; the drives are told
    to disable (enable register 0x106 = 0 to each unit) before the board
@@ -37,6 +46,7 @@ One line per case, "ok NAME" or "FAIL NAME: why"; last line
 import os
 import re
 import select
+import socket
 import subprocess
 import sys
 import tempfile
@@ -46,13 +56,16 @@ import traceback
 import tty
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from mcu_test import Board, ICOUNT_SHIFT, REPLY_S, expect, position, symbol  # noqa: E402
+from mcu_test import (PERIOD_CYCLES, REPLY_S, Board, ICOUNT_SHIFT, expect,  # noqa: E402
+                      instructions, position, symbol)
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 # hal/cortexm/plant_modbus.c with the test image's timing (mk/cortexm.mk,
 # MCU_TEST_DEFS)
 DRIVE_TIMEOUT_MS = 5000
+TIMEOUT_MS = 1000  # a request's answer (BOARD_MB_TIMEOUT_US)
 RETRIES = 1
+MBD_PROBE_MS = 200  # a silent drive's probe (hal/modbus/mbmaster.h)
 CYCLE_CALC_US = 12507  # mbd_cycle_us: two drives at 115200 baud
 COUNT_MM = 150 * 3.141592653589793 / 16384
 WINDOW_MM = 0.05  # position_window_mm
@@ -84,12 +97,129 @@ def request_len(b):
     return 1
 
 
+def reply_len(req, b):
+    """The length of the answer to req at the start of b (0: not known
+    yet)."""
+    if len(b) < 3:
+        return 0
+    if b[1] & 0x80:
+        return 5
+    if req[1] in (3, 4):
+        return 5 + b[2]
+    return 8
+
+
+class Gdb:
+    """QEMU's gdbstub (GDB remote protocol): breakpoints and run control."""
+
+    def __init__(self, path):
+        self.sock = socket.socket(socket.AF_UNIX)
+        self.sock.settimeout(REPLY_S)
+        self.sock.connect(path)
+        self.buf = b""
+
+    def send(self, data):
+        self.sock.sendall(b"$%s#%02x" % (data, sum(data) & 0xFF))
+
+    def packet(self):
+        """The next packet from the stub (acknowledged)."""
+        while True:
+            self.buf = self.buf.lstrip(b"+")
+            m = re.match(rb"[^$]*\$([^#]*)#[0-9a-fA-F]{2}", self.buf, re.S)
+            if m:
+                self.buf = self.buf[m.end():]
+                self.sock.sendall(b"+")
+                return m.group(1)
+            got = self.sock.recv(4096)
+            assert got, "gdbstub closed"
+            self.buf += got
+
+    def cmd(self, data):
+        self.send(data)
+        return self.packet()
+
+    def regs(self):
+        """r0 to r15 (the stub has no single-register read for this core)."""
+        g = bytes.fromhex(self.cmd(b"g")[:128].decode())
+        return [int.from_bytes(g[4 * k:4 * k + 4], "little") for k in range(16)]
+
+
+def vehicle_addr(elf):
+    """The board's unit (board_main.c's vehicle_t: a static the linker
+    renames), by its size."""
+    out = subprocess.run(["arm-none-eabi-nm", "-S", elf], check=True, capture_output=True,
+                         text=True).stdout
+    size = offset(elf, "vehicle_t", "drive_silent_ticks")[1]
+    for m in re.finditer(r"^([0-9a-f]+) ([0-9a-f]+) \w unit(\.\S+)?$", out, re.M):
+        if int(m.group(2), 16) == size:
+            return int(m.group(1), 16)
+    raise AssertionError("no unit of %d bytes in %s" % (size, elf))
+
+
+_dies = {}
+
+
+def offset(elf, typedef, member):
+    """The offset of a member of a struct typedef in elf's debug information
+    (the board's own layout, which the test need not repeat), and the
+    struct's size: offset(elf, "mbd_drive_t", "last_ok_us")."""
+    if elf not in _dies:
+        out = subprocess.run(["arm-none-eabi-readelf", "--debug-dump=info", elf], check=True,
+                             capture_output=True, text=True).stdout
+        dies, cur = {}, None
+        for line in out.splitlines():
+            m = re.match(r"\s*<(\d+)><([0-9a-f]+)>: Abbrev Number: \d+ \((\w+)\)", line)
+            if m:
+                cur = {"depth": int(m.group(1)), "tag": m.group(3), "kids": []}
+                dies[int(m.group(2), 16)] = cur
+                cur["at"] = int(m.group(2), 16)
+                continue
+            m = re.match(r"\s*<[0-9a-f]+>\s+(DW_AT_\w+)\s*: (.*)$", line)
+            if m and cur is not None:
+                cur[m.group(1)] = m.group(2).strip()
+        # children: members follow their struct at depth + 1
+        stack = []
+        for at in sorted(dies):
+            d = dies[at]
+            while stack and stack[-1]["depth"] >= d["depth"]:
+                stack.pop()
+            if stack:
+                stack[-1]["kids"].append(d)
+            stack.append(d)
+        _dies[elf] = dies
+    dies = _dies[elf]
+    for d in dies.values():
+        if d["tag"] == "DW_TAG_typedef" and d.get("DW_AT_name", "").endswith(": " + typedef):
+            st = dies[int(re.search(r"<0x([0-9a-f]+)>", d["DW_AT_type"]).group(1), 16)]
+            for k in st["kids"]:
+                if k.get("DW_AT_name", "").split(": ")[-1] == member:
+                    return int(k["DW_AT_data_member_location"]), int(st["DW_AT_byte_size"])
+    raise AssertionError("%s.%s not in %s" % (typedef, member, elf))
+
+
+UART1_STATE = 0x40005004  # CMSDK UART1: bit 1 receive buffer full
+
+
 class DriveBoard(Board):
-    """The board with its drive line relayed to a peer."""
+    """The board with its drive line relayed to a peer in the board's time.
+
+    QEMU's gdbstub stops the emulated board (its instruction count, and so
+    its clock, stands still) where the master has sent a request whole (the
+    driver enable going off, p_de) and where it has taken a byte of an
+    answer from the UART (p_read). At the first stop the relay gives the
+    peer the board's time ("clock US", SysTick periods), passes the request
+    on and writes the peer's whole answer back; the board goes on once the
+    UART holds its first byte, and after each byte taken once it holds the
+    next (the CMSDK UART has a one-byte buffer, filled by QEMU's I/O thread
+    in host time). So the peer's latency, QEMU's and the host's load never
+    show in the board's time, and the drives move in the board's time. The
+    frames a fault handler sends by polling (the drives off) pass without a
+    stop; their answers are dropped."""
 
     def __init__(self, elf, tmp, name, peer_argv):
         self.elf = elf
         self.qmp_path = os.path.join(tmp, "qmp-%s.sock" % name)
+        gdb_path = os.path.join(tmp, "gdb-%s.sock" % name)
         master, self.fd = os.openpty()
         tty.setraw(self.fd)
         self.pty = os.ttyname(self.fd)
@@ -103,21 +233,27 @@ class DriveBoard(Board):
         self.peer_keep = peer_s
         self.rx = b""
         self.qmp = None
+        self.qlock = threading.RLock()  # one monitor, two threads
         self.proc = None
         self.sent = bytearray()  # what the board sent on the line
         self.quiet = set()       # units whose answers the relay drops
-        self.trace = []          # (host time, direction, frame): shown on a failure
+        self.trace = []          # (board ms, direction, frame): shown on a failure
         self.stop = False
+        self.peer_out = b""
+        self.bp_de = symbol(elf, "p_de")
         # The peer first, answering, then the board: its first requests
         # must not find a peer still starting.
         self.peer = subprocess.Popen([a.replace("PORT", self.peer_path) for a in peer_argv],
                                      stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                                     stderr=subprocess.STDOUT, text=True)
+                                     stderr=subprocess.STDOUT)
         self._probe()
         self.log = open(os.path.join(tmp, "qemu-%s.log" % name), "w+b")
+        # -S: stopped until the breakpoints are set
         self.proc = subprocess.Popen(
-            ["qemu-system-arm", "-M", "mps2-an386", "-nographic", "-monitor", "none",
+            ["qemu-system-arm", "-M", "mps2-an386", "-nographic", "-monitor", "none", "-S",
              "-qmp", "unix:%s,server=on,wait=off" % self.qmp_path,
+             "-chardev", "socket,id=gdb,path=%s,server=on,wait=off" % gdb_path,
+             "-gdb", "chardev:gdb",
              "-add-fd", "fd=%d,set=1" % master, "-add-fd", "fd=%d,set=2" % line,
              "-chardev", "serial,id=uart,path=/dev/fdset/1", "-serial", "chardev:uart",
              "-chardev", "serial,id=rs485,path=/dev/fdset/2", "-serial", "chardev:rs485",
@@ -126,13 +262,22 @@ class DriveBoard(Board):
             pass_fds=(master, line), start_new_session=True)
         os.close(master)
         os.close(line)
-        self.relay = threading.Thread(target=self._relay, daemon=True)
-        self.relay.start()
         deadline = time.monotonic() + 30
-        while not os.path.exists(self.qmp_path):
+        while not (os.path.exists(self.qmp_path) and os.path.exists(gdb_path)):
             if self.proc.poll() is not None or time.monotonic() > deadline:
                 raise RuntimeError("qemu did not start")
             time.sleep(0.05)
+        self.gdb = Gdb(gdb_path)
+        self.gdb.cmd(b"?")
+        for a in (self.bp_de,):
+            assert self.gdb.cmd(b"Z0,%x,2" % a) == b"OK", "breakpoint at 0x%x" % a
+        self.gdb.send(b"c")
+        self.relay = threading.Thread(target=self._relay, daemon=True)
+        self.relay.start()
+
+    def monitor(self, command):
+        with self.qlock:
+            return super().monitor(command)
 
     def _probe(self):
         """Asks the peer for unit 1's status register until it answers."""
@@ -151,37 +296,111 @@ class DriveBoard(Board):
         while select.select([self.peer_m], [], [], 0)[0]:
             os.read(self.peer_m, 64)
 
+    def _clock(self, ms):
+        """Gives the peer the board's time; returns once it has taken it."""
+        line = b"clock %d" % (ms * 1000)
+        self.peer.stdin.write(line + b"\n")
+        self.peer.stdin.flush()
+        deadline = time.monotonic() + REPLY_S
+        while True:
+            while b"\n" in self.peer_out:
+                got, self.peer_out = self.peer_out.split(b"\n", 1)
+                if got.strip() == line:
+                    return
+            assert time.monotonic() < deadline, "the peer does not take its clock"
+            if select.select([self.peer.stdout], [], [], 1)[0]:
+                self.peer_out += os.read(self.peer.stdout.fileno(), 4096)
+
+    def _answer(self, req):
+        """The peer's answer to req, whole; what it sent when it stops
+        short."""
+        got = b""
+        deadline = time.monotonic() + 2
+        while True:
+            n = reply_len(req, got)
+            if n and len(got) >= n:
+                return got
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return got
+            if select.select([self.peer_m], [], [], left)[0]:
+                got += os.read(self.peer_m, 4096)
+
+    def _take_line(self, wait):
+        while select.select([self.line], [], [], wait)[0]:
+            b = os.read(self.line, 4096)
+            self.sent += b
+            self.pend += b
+            wait = 0
+
+    def _uart_full(self):
+        """Returns once QEMU has put the next byte into the UART."""
+        deadline = time.monotonic() + REPLY_S
+        while not self.words_at(UART1_STATE, 1)[0] & 2:
+            assert time.monotonic() < deadline, "the UART takes no byte"
+            time.sleep(0.0005)
+
+    def _exchange(self):
+        """The board stopped with its request sent: every whole frame on
+        the line to the peer, the last one's answer back."""
+        deadline = time.monotonic() + REPLY_S
+        frames = []
+        while True:
+            self._take_line(0.01)
+            while True:
+                n = request_len(self.pend)
+                if n == 0 or len(self.pend) < n:
+                    break
+                frames.append(self.pend[:n])
+                self.pend = self.pend[n:]
+            if frames and not self.pend:
+                break
+            assert time.monotonic() < deadline, "no whole request: %s" % self.pend.hex()
+        with self.qlock:
+            ms = self.words("periods", 1)[0]
+            self._clock(ms)
+            for k, req in enumerate(frames):
+                os.write(self.peer_m, req)
+                self.trace.append((ms, ">", req.hex()))
+                ans = self._answer(req)
+                drop = k < len(frames) - 1 or req[0] in self.quiet
+                self.trace.append((ms, "x" if drop else "<", ans.hex()))
+            if ans and not drop:
+                os.write(self.line, ans)
+                self._uart_full()
+
     def _relay(self):
-        # Whole frames to the peer: the emulated core pauses to stay in step
-        # with the host's clock (align=on), and a pause between two bytes of
-        # one frame would reach the peer as a gap, which a wire does not
-        # have (the UART sends a frame's bytes back to back).
-        pend = b""
+        self.pend = b""
         while not self.stop:
-            r, _, _ = select.select([self.line, self.peer_m], [], [], 0.1)
+            r, _, _ = select.select([self.line, self.gdb.sock], [], [], 0.1)
             if self.line in r:
-                b = os.read(self.line, 4096)
-                self.sent += b
-                pend += b
-                while True:
-                    n = request_len(pend)
-                    if n == 0 or len(pend) < n:
-                        break
-                    os.write(self.peer_m, pend[:n])
-                    self.trace.append((time.monotonic(), ">", pend[:n].hex()))
-                    pend = pend[n:]
-            if self.peer_m in r:
-                b = os.read(self.peer_m, 4096)
-                drop = b and b[0] in self.quiet
-                self.trace.append((time.monotonic(), "x" if drop else "<", b.hex()))
-                if not drop:
-                    os.write(self.line, b)
+                self._take_line(0)
+            self.gdb.buf = self.gdb.buf.lstrip(b"+")
+            if self.gdb.sock not in r and not self.gdb.buf:
+                continue
+            try:
+                self.gdb.packet()  # a stop: at a breakpoint
+                r = self.gdb.regs()
+                pc = r[15]
+                if pc == self.bp_de and r[1] == 0:
+                    self._exchange()
+                # on over the breakpoint: a step runs its instruction
+                self.gdb.cmd(b"s")
+                self.gdb.send(b"c")
+            except (AssertionError, OSError) as e:
+                if not self.stop:
+                    self.trace.append((0, "!", str(e)))
+                return
+
+    def words_at(self, addr, n):
+        out = self.monitor("xp /%dwx 0x%x" % (n, addr))
+        return [int(x, 16) for x in re.findall(r"\b0x([0-9a-f]{8})\b", out)][:n]
 
     def close(self):
         self.stop = True
         if self.proc:
-            self.relay.join(2)
-            super().close()
+            super().close()  # the stub's socket closes: the relay ends
+            self.relay.join(10)
         self.peer.terminate()
         self.peer.wait(10)
         for fd in (self.line, self.peer_m, self.peer_keep):
@@ -260,6 +479,17 @@ def c_move(b):
           % (cyc[0], cyc[1], cyc[2], CYCLE_CALC_US, b.words("plant_cost", 2)[1],
              c["requests"], c["timeouts"]))
     assert cyc[2] > 10
+    # The tick's rule with the master polled between ticks. The worst
+    # request includes the case's $config lines, which re-apply the
+    # configuration (not a request of the move), and the master's worst
+    # poll includes the relay's stop inside it: both are shown, not judged.
+    k = b.costs()
+    print("  board: worst tick %d cycles (%d instructions, %.1f %% of a 1 ms period at 25 MHz), "
+          "worst request %d cycles (%.0f %%), master's worst poll %d cycles, %d ticks" % (
+              k["tick_worst"], instructions(k["tick_worst"]),
+              100.0 * k["tick_worst"] / PERIOD_CYCLES, k["req_worst"],
+              100.0 * k["req_worst"] / PERIOD_CYCLES, b.words("plant_cost", 2)[1], k["ticks"]))
+    assert k["tick_worst"] < PERIOD_CYCLES // 2, k
 
 
 def c_alarm(b):
@@ -273,14 +503,50 @@ def c_alarm(b):
 def c_silent(b):
     expect(b, "setPower true", "ok true")
     b.wait(1000)
-    before = b.bus()
     b.quiet.add(2)
     b.wait_state('ok true 19 "Alarm-202"', 3 * DRIVE_TIMEOUT_MS)
     expect(b, "getActiveAlarm 1", 'ok true 1 1 202 fault "drive 1 not answering"')
-    after = b.bus()
-    # its first failed request: one attempt and 2 retries, each a timeout
-    assert after["retries"] - before["retries"] >= RETRIES, (before, after)
-    assert after["timeouts"] - before["timeouts"] >= 1 + RETRIES, (before, after)
+    # The 202's tick (plant_cost.fault_us: the first fault, in the tick
+    # that raised it) against the last tick that had a sample of drive 1
+    # (the unit's drive_silent_ticks[1] ticks before the current one, read
+    # within one period): exactly drive_timeout_ms + 1 ticks later (1 ms
+    # ticks; the firmware's rule, vehicle_tick.c: more than
+    # drive_timeout_ticks without a sample), whatever the bus's timing.
+    fault = b.words("plant_cost", 1, offset(b.elf, "plant_cost_t", "fault_us")[0])[0]
+    unit = vehicle_addr(b.elf)
+    sil_at = unit + offset(b.elf, "vehicle_t", "drive_silent_ticks")[0] + 4
+    while True:
+        p0 = b.words("periods", 1)[0]
+        silent = b.words_at(sil_at, 1)[0]
+        if b.words("periods", 1)[0] == p0:
+            break
+    last = p0 - silent
+    assert fault // 1000 - last == DRIVE_TIMEOUT_MS + 1, \
+        "202 at %d us, %d ticks after drive 1's last sample (tick %d)" % (
+            fault, fault // 1000 - last, last)
+    # and that sample is the answer the relay passed last: before the tick
+    answered = [t for t, d, h in b.trace if d == "<" and h.startswith("0203")]
+    assert answered and answered[-1] <= last, (answered[-3:], last)
+    # Drive 1's requests the relay dropped, in the board's time: the first
+    # failed one sent 1 + RETRIES times, each after the last's timeout
+    # (TIMEOUT_MS; its quiet time, byte_us, has passed by then), then single
+    # probes, each MBD_PROBE_MS after the last one failed and within a drive
+    # cycle (the worst measured) of it.
+    drop = [(b.trace[k - 1][0], b.trace[k - 1][2]) for k in range(1, len(b.trace))
+            if b.trace[k][1] == "x"]
+    assert len(drop) >= 1 + RETRIES + 1, drop
+    assert all(h == drop[0][1] for _, h in drop[:1 + RETRIES]), drop
+    worst_ms = b.words("plant_bus", 2)[1] // 1000 + 1  # the drive cycle's worst
+    for k in range(1, len(drop)):
+        gap = drop[k][0] - drop[k - 1][0]
+        lo = TIMEOUT_MS + (0 if k <= RETRIES else MBD_PROBE_MS)
+        hi = lo + (1 if k <= RETRIES else worst_ms)
+        assert lo <= gap <= hi, \
+            "request %d of drive 1 %d ms after the one before: %s" % (k, gap, drop)
+    # the 202 came with drive 1 already probed: its first failed cycle took
+    # (1 + RETRIES) x TIMEOUT_MS after at most a cycle, within the drive
+    # timeout
+    assert drop[RETRIES][0] + TIMEOUT_MS < last + DRIVE_TIMEOUT_MS, (drop[:3], last)
 
 
 def c_pymodbus(b):
@@ -359,9 +625,8 @@ def main():
                 if b:
                     try:
                         print("  then: %s | %s" % (b.ex("getActiveAlarm 4"), b.bus()))
-                        t0 = b.trace[-40][0] if len(b.trace) >= 40 else 0
                         for t, d, h in b.trace[-40:]:
-                            print("  %9.1f ms %s %s" % ((t - t0) * 1000, d, h))
+                            print("  %9d ms %s %s" % (t, d, h))
                     except Exception as e2:
                         print("  no state after it: %s" % e2)
             finally:
