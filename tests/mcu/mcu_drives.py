@@ -28,8 +28,8 @@ Cases:
    exactly drive_timeout_ms + 1 ticks after the last tick that had its
    sample (the test image: 5000 ms, mk/cortexm.mk), whatever the bus's
    timing; its first failed request sent exactly 1 + RETRIES (1) times,
-   TIMEOUT_MS (1000) apart, then single probes MBD_PROBE_US (200 ms) after
-   each failure, all before the 202;
+   at most TIMEOUT_MS (1000) apart, then single probes MBD_PROBE_US
+   (200 ms) after each failure, all before the 202;
  - pymodbus: the same move against pymodbus's server;
  - watchdog (test image): $hang spins the main loop; the drives are told
    to disable (enable register 0x106 = 0 to each unit) before the board
@@ -528,10 +528,14 @@ def c_silent(b):
     answered = [t for t, d, h in b.trace if d == "<" and h.startswith("0203")]
     assert answered and answered[-1] <= last, (answered[-3:], last)
     # Drive 1's requests the relay dropped, in the board's time: the first
-    # failed one sent 1 + RETRIES times, each after the last's timeout
-    # (TIMEOUT_MS; its quiet time, byte_us, has passed by then), then single
-    # probes, each MBD_PROBE_MS after the last one failed and within a drive
-    # cycle (the worst measured) of it.
+    # failed one sent 1 + RETRIES times, each at the latest when the one
+    # before timed out (TIMEOUT_MS; its quiet time, byte_us, has passed by
+    # then), then single probes: each MBD_PROBE_MS after the one before
+    # failed (never at once, as a retry would be), that within TIMEOUT_MS,
+    # and a drive cycle (the worst measured) later at most. An attempt ends
+    # before its timeout when stray bytes come (the rest of another drive's
+    # answer that the emulated UART handed over late: docs/mcu.md), so the
+    # bounds are the master's, not exact gaps.
     drop = [(b.trace[k - 1][0], b.trace[k - 1][2]) for k in range(1, len(b.trace))
             if b.trace[k][1] == "x"]
     assert len(drop) >= 1 + RETRIES + 1, drop
@@ -539,8 +543,8 @@ def c_silent(b):
     worst_ms = b.words("plant_bus", 2)[1] // 1000 + 1  # the drive cycle's worst
     for k in range(1, len(drop)):
         gap = drop[k][0] - drop[k - 1][0]
-        lo = TIMEOUT_MS + (0 if k <= RETRIES else MBD_PROBE_MS)
-        hi = lo + (1 if k <= RETRIES else worst_ms)
+        lo, hi = (0, TIMEOUT_MS + 1) if k <= RETRIES else (
+            MBD_PROBE_MS, TIMEOUT_MS + MBD_PROBE_MS + worst_ms)
         assert lo <= gap <= hi, \
             "request %d of drive 1 %d ms after the one before: %s" % (k, gap, drop)
     # the 202 came with drive 1 already probed: its first failed cycle took
