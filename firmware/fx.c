@@ -86,30 +86,26 @@ uint64_t fx_udiv64_small(uint64_t n, uint32_t d)
 
 /* Taylor series on |x| <= pi/4 (Q30 radians), Horner form with Q30
  * coefficients: the first omitted terms are below 2e-9 (two Q30 steps). */
-/* Horner's rule in Q30 over x2 = x^2 with the coefficients c[0..4], the
- * highest first: sin's and cos's series share one loop (0.15 KiB of a
- * board's flash; a host's compiler unrolls it). */
-static int64_t poly_q30(int64_t x2, const int32_t c[5])
-{
-	int64_t p = c[0];
-	for (int k = 1; k < 5; k++)
-		p = c[k] + ((x2 * p) >> 30);
-	return p;
-}
-
 static int32_t sin_poly(int64_t x)
 {
-	/* 1/9!, -1/7!, 1/5!, -1/3!, 1 */
-	static const int32_t c[5] = {2959, -213044, 8947849, -178956971, FX_Q30_ONE};
-	return (int32_t)((x * poly_q30((x * x) >> 30, c)) >> 30);
+	int64_t x2 = (x * x) >> 30;
+	int64_t p = 2959;		   /* 1/9! */
+	p = -213044 + ((x2 * p) >> 30);	   /* -1/7! */
+	p = 8947849 + ((x2 * p) >> 30);	   /* 1/5! */
+	p = -178956971 + ((x2 * p) >> 30); /* -1/3! */
+	p = FX_Q30_ONE + ((x2 * p) >> 30);
+	return (int32_t)((x * p) >> 30);
 }
 
 static int32_t cos_poly(int64_t x)
 {
-	/* -1/10!, 1/8!, -1/6!, 1/4!, -1/2! */
-	static const int32_t c[5] = {-296, 26630, -1491308, 44739243, -536870912};
 	int64_t x2 = (x * x) >> 30;
-	return (int32_t)(FX_Q30_ONE + ((x2 * poly_q30(x2, c)) >> 30));
+	int64_t p = -296;		   /* -1/10! */
+	p = 26630 + ((x2 * p) >> 30);	   /* 1/8! */
+	p = -1491308 + ((x2 * p) >> 30);   /* -1/6! */
+	p = 44739243 + ((x2 * p) >> 30);   /* 1/4! */
+	p = -536870912 + ((x2 * p) >> 30); /* -1/2! */
+	return (int32_t)(FX_Q30_ONE + ((x2 * p) >> 30));
 }
 
 #define HALF_PI_Q30 1686629713LL /* pi/2 * 2^30 */
