@@ -253,12 +253,17 @@ bool motion_plan_corner(motion_t *m, uint8_t i)
 		/* Can the unit still slow to the corner speed before it begins?
 		 * Under a jerk limit the glide and the ramps take up to 2 A / J +
 		 * 6 ticks more, at up to the speed the glide reaches. */
-		q32_t d = rem - corner.t_mm;
+		q32_t d = rem - corner.t_mm, top = m->v;
 		if (ONLINE_JERK && m->lim_j > 0) {
 			q32_t aj = m->a_t_pt2 / m->lim_j;
 			d -= (m->v + m->a_t_pt2 * (aj + 1) / 2) * (2 * aj + 6);
+			/* Accelerating, the glide takes the acceleration to zero
+			 * at the jerk first: the speed rises by up to acc (acc /
+			 * J + 1) / 2 before the line can slow. */
+			if (m->acc > 0)
+				top += m->acc * (m->acc / m->lim_j + 1) / 2;
 		}
-		if (traj_reach(d, c->vend_pt, m->a_t_pt2) < m->v) {
+		if (traj_reach(d, c->vend_pt, m->a_t_pt2) < top) {
 			c->has_corner = false;
 			motion_backward_pass_from(m, i);
 			return true;

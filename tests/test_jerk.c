@@ -937,6 +937,47 @@ static void test_corner_speed_lowered_under_running_line(void **state)
 	assert_true(r.jmax[0] <= r.m.jmax_t_pt3);
 }
 
+/* A waypoint queued while a short cruise line still accelerates on its
+ * plan from rest (25 mm, queued 185 ticks in, at 34 mm/s and 365 mm/s^2):
+ * the corner (35 degrees, 22 mm tangents) fits in what is left of the
+ * line, but a glide would take the acceleration to zero at the jerk first,
+ * the speed rising to about 67 mm/s, over the corner's cap of 35 mm/s.
+ * Found by fuzz_ops on a mecanum base: the corner entered above its cap
+ * braked at its jerk from the line's acceleration, the rotation's
+ * acceleration 1.05 % over its limit. No corner is fitted: the line runs
+ * on its plan and stops on its waypoint to the raw unit, and the route
+ * goes on from there within the set accelerations (9,094 ticks after the
+ * request, on either base). */
+static void test_waypoint_queued_while_accelerating(void **state)
+{
+	(void)state;
+	for (int omni = 0; omni < 2; omni++) {
+		jrig_t r;
+		jrig_init(&r, omni ? MOTION_KIN_OMNI : MOTION_KIN_DIFF);
+		assert_true(motion_cruise_abs(&r.m, (q32_t)25 << 32, 0));
+		for (int i = 0; i < 185; i++)
+			jrig_tick(&r);
+		assert_true(r.m.sc_on && r.m.acc > 0);
+		assert_true(motion_cruise_abs(&r.m, (q32_t)2575 << 32, (q32_t)1775 << 32));
+		assert_false(r.m.q[r.m.q_head].has_corner);
+		int n = 0;
+		bool stopped_on_first = false;
+		for (; motion_has_work(&r.m) && n < 20000; n++) {
+			jrig_tick(&r);
+			stopped_on_first = stopped_on_first ||
+					   (r.u1[0] == 0 && r.u1[2] == 0 &&
+					    r.m.ref.x_mm == (q32_t)25 << 32 && r.m.ref.y_mm == 0);
+		}
+		jrig_tick(&r);
+		assert_int_equal(n, 9094);
+		assert_true(stopped_on_first);
+		assert_int_equal(r.m.ref.x_mm, (q32_t)2575 << 32);
+		assert_int_equal(r.m.ref.y_mm, (q32_t)1775 << 32);
+		assert_true(r.amax[0] <= r.m.a_t_pt2);
+		assert_true(r.amax[2] <= r.m.a_r_pt2);
+	}
+}
+
 /* A blended cruise route under jerk limits: 1000 mm out, 1000 mm across,
  * 1000 mm back, 700 mm down (three 90 degree corners, 200 mm blends). The
  * lines run between the corner speeds on traj_ln's ramps and the corners
@@ -1157,6 +1198,7 @@ int main(void)
 	    cmocka_unit_test(test_cruise_s_curve),
 	    cmocka_unit_test(test_blend_planned_ahead),
 	    cmocka_unit_test(test_stop_in_held_corner),
+	    cmocka_unit_test(test_waypoint_queued_while_accelerating),
 	    cmocka_unit_test(test_jog_retarget_while_accelerating),
 	    cmocka_unit_test(test_continuous_s_curve),
 	    cmocka_unit_test(test_continuous_retarget),
