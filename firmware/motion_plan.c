@@ -192,6 +192,23 @@ static bool pass_straight(motion_t *m, motion_cmd_t *c, uint8_t i)
 	return true;
 }
 
+/* Whether the line running can slow to speed c within d. Under a jerk
+ * limit the glide and the ramps take up to 2 A / J + 6 ticks more, at up
+ * to the speed the glide reaches; accelerating, the glide takes the
+ * acceleration to zero at the jerk first, the speed rising by up to acc
+ * (acc / J + 1) / 2 before the line can slow. */
+static bool line_can_slow(const motion_t *m, q32_t d, q32_t c)
+{
+	q32_t top = m->v;
+	if (ONLINE_JERK && m->lim_j > 0) {
+		q32_t aj = m->a_t_pt2 / m->lim_j;
+		d -= (m->v + m->a_t_pt2 * (aj + 1) / 2) * (2 * aj + 6);
+		if (m->acc > 0)
+			top += m->acc * (m->acc / m->lim_j + 1) / 2;
+	}
+	return traj_reach(d, c, m->a_t_pt2) >= top;
+}
+
 /* Plan the corner at queued cruise command i (blending into i + 1); true
  * when one was planned (and the corner speeds with it). */
 bool motion_plan_corner(motion_t *m, uint8_t i)
@@ -250,20 +267,8 @@ bool motion_plan_corner(motion_t *m, uint8_t i)
 	c->exit_y_mm = c->target.y_mm + fx_mul_q30(corner.t_mm, n->uy);
 	motion_backward_pass_from(m, i);
 	if (executing) {
-		/* Can the unit still slow to the corner speed before it begins?
-		 * Under a jerk limit the glide and the ramps take up to 2 A / J +
-		 * 6 ticks more, at up to the speed the glide reaches. */
-		q32_t d = rem - corner.t_mm, top = m->v;
-		if (ONLINE_JERK && m->lim_j > 0) {
-			q32_t aj = m->a_t_pt2 / m->lim_j;
-			d -= (m->v + m->a_t_pt2 * (aj + 1) / 2) * (2 * aj + 6);
-			/* Accelerating, the glide takes the acceleration to zero
-			 * at the jerk first: the speed rises by up to acc (acc /
-			 * J + 1) / 2 before the line can slow. */
-			if (m->acc > 0)
-				top += m->acc * (m->acc / m->lim_j + 1) / 2;
-		}
-		if (traj_reach(d, c->vend_pt, m->a_t_pt2) < top) {
+		/* Can the unit still slow to the corner speed before it begins? */
+		if (!line_can_slow(m, rem - corner.t_mm, c->vend_pt)) {
 			c->has_corner = false;
 			motion_backward_pass_from(m, i);
 			return true;
