@@ -420,33 +420,34 @@ static void test_bus_silent_and_exceptions(void **state)
 	assert_int_equal(b.d[0].failures, 3 + 1);
 }
 
-/* The drive cycle at 115200 baud, 10-bit characters: per drive 98
- * half-characters (a 16 write of 13 bytes and its 8, a 03 read
- * of 8 and its 13, 3.5 characters of gap after each) and 1 ms of
- * turnaround per request. */
+/* The drive cycle at 115200 baud, 10-bit characters: per drive 84
+ * half-characters (a 16 write of 13 bytes and its 8, a 03 read of 8 and
+ * its 13), and per request the gap the master waits (1750 us above 19200
+ * baud, 3.5 characters below) and 1 ms of turnaround: two drives
+ * 7,292 + 4 x 2,750 us. */
 static void test_cycle_and_check(void **state)
 {
 	(void)state;
 	const mb_profile_t *g = mbp_builtin("generic");
-	assert_int_equal(mbd_cycle_us(g, 2, 115200, 10, 1000), 12507);
-	assert_int_equal(mbd_cycle_us(g, 4, 115200, 10, 1000), 25014);
-	assert_int_equal(mbd_cycle_us(g, 4, 9600, 11, 1000), 232584);
+	assert_int_equal(mbd_cycle_us(g, 2, 115200, 10, 1000), 18292);
+	assert_int_equal(mbd_cycle_us(g, 4, 115200, 10, 1000), 36584);
+	assert_int_equal(mbd_cycle_us(g, 4, 9600, 11, 1000), 232588);
 	/* the compile-time form a board checks its constants with */
 	assert_int_equal(
-	    MBD_CYCLE_US(2, MBD_GENERIC_HALFCHARS, MBD_GENERIC_REQUESTS, 115200, 10, 1000), 12507);
+	    MBD_CYCLE_US(2, MBD_GENERIC_HALFCHARS, MBD_GENERIC_REQUESTS, 115200, 10, 1000), 18292);
 	assert_int_equal(
-	    MBD_CYCLE_US(4, MBD_GENERIC_HALFCHARS, MBD_GENERIC_REQUESTS, 9600, 11, 1000), 232584);
-	assert_true(MBD_LINE_OK(12507, 50000, 2, 500));
-	assert_false(MBD_LINE_OK(232584, 50000, 2, 500));
+	    MBD_CYCLE_US(4, MBD_GENERIC_HALFCHARS, MBD_GENERIC_REQUESTS, 9600, 11, 1000), 232588);
+	assert_true(MBD_LINE_OK(18292, 50000, 2, 500));
+	assert_false(MBD_LINE_OK(232588, 50000, 2, 500));
 	assert_null(mbd_check(g, 2, 115200, 10, 50000, 2, 500));
 	assert_null(mbd_check(g, 4, 115200, 10, 50000, 2, 500));
 	/* 9600 baud, four drives: 233 ms a cycle, not within 500 ms twice */
 	assert_string_equal(mbd_check(g, 4, 9600, 11, 50000, 2, 500),
 			    "the line does not carry the drive cycle: a cycle and a failed request "
 			    "must fit twice in drive_timeout_ms");
-	/* 19200 baud, two drives, 20 ms timeout, one retry: 2 x (58 + 40) ms
+	/* 19200 baud, two drives, 20 ms timeout, one retry: 2 x (55 + 40) ms
 	 * fits 200 ms; with 50 ms timeout and 2 retries it does not */
-	assert_int_equal(mbd_cycle_us(g, 2, 19200, 10, 1000), 55042);
+	assert_int_equal(mbd_cycle_us(g, 2, 19200, 10, 1000), 55046);
 	assert_null(mbd_check(g, 2, 19200, 10, 20000, 1, 200));
 	assert_non_null(mbd_check(g, 2, 19200, 10, 50000, 2, 200));
 	assert_non_null(mbd_check(g, 5, 115200, 10, 50000, 2, 500));

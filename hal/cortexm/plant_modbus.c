@@ -13,9 +13,9 @@
  *
  * The cycle, when every drive answers: per drive a target-speed write
  * (function 16, 13 bytes, 8 back) and one read of position, status and
- * alarm (03, 8 bytes, 13 back), with the 3.5-character gap after each
- * frame: 2 x 49 characters of 86.8 us, plus MBD_TURNAROUND_US for each
- * answer to start: 6.3 ms a drive, 12.5 ms for two, 25.1 ms for four
+ * alarm (03, 8 bytes, 13 back): 42 characters of 86.8 us, and before each
+ * request the 1750 us gap (MBM_GAP_US) and MBD_TURNAROUND_US for its
+ * answer to start: 9.1 ms a drive, 18.3 ms for two, 36.6 ms for four
  * (mbd_cycle_us; docs/mcu.md). Each request waits MB_TIMEOUT_US for its
  * answer and is tried MB_RETRIES more times; the firmware's drive timeout
  * is MB_DRIVE_TIMEOUT_MS, and the build refuses a line that cannot fit a

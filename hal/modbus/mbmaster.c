@@ -32,11 +32,9 @@ uint32_t mbm_byte_us(uint32_t baud, uint32_t frame_bits)
 void mbm_init(mbm_t *m, const mbm_port_t *port, uint32_t baud, uint32_t frame_bits,
 	      uint32_t timeout_us, uint8_t retries, uint32_t now_us)
 {
-	uint32_t ch = mbm_char_us(baud, frame_bits);
 	*m = (mbm_t){0};
 	m->port = port;
-	/* Above 19200 baud the standard fixes the gap at 1750 us. */
-	m->gap_us = baud > 19200u ? 1750u : (7u * ch + 1u) / 2u;
+	m->gap_us = MBM_GAP_US(baud, frame_bits);
 	m->byte_us = mbm_byte_us(baud, frame_bits);
 	m->timeout_us = timeout_us;
 	m->retries = retries;
@@ -227,10 +225,10 @@ uint8_t mbm_poll(mbm_t *m, uint32_t now_us)
 
 enum { DS_NONE, DS_INIT, DS_RESET, DS_ENABLE, DS_SPEED, DS_READ };
 
-/* Characters of a request and its reply, x2 (the gap is 3.5). */
+/* Characters of a request and its reply, x2. */
 static uint32_t req_halfchars(uint32_t req, uint32_t rep)
 {
-	return 2u * (req + rep) + 7u;
+	return 2u * (req + rep);
 }
 
 uint32_t mbd_cycle_us(const mb_profile_t *p, unsigned ndrives, uint32_t baud, uint32_t frame_bits,
@@ -248,7 +246,7 @@ uint32_t mbd_cycle_us(const mb_profile_t *p, unsigned ndrives, uint32_t baud, ui
 	}
 	uint64_t line_us = ((uint64_t)half * frame_bits * 1000000u + (uint64_t)2u * baud - 1u) /
 			   ((uint64_t)2u * baud);
-	return (uint32_t)line_us + nreq * turnaround_us;
+	return (uint32_t)line_us + nreq * (turnaround_us + MBM_GAP_US(baud, frame_bits));
 }
 
 const char *mbd_check(const mb_profile_t *p, unsigned ndrives, uint32_t baud, uint32_t frame_bits,

@@ -99,8 +99,12 @@ uint16_t mbm_crc(const uint8_t *b, size_t n);
  * MBM_BYTE_MIN_US (vehicle-fw's rule too, hal/linux/modbus_drive.c). */
 #define MBM_BYTE_MIN_US 5000u
 uint32_t mbm_byte_us(uint32_t baud, uint32_t frame_bits);
-/* gap: 3.5 characters (1750 us above 19200 baud, as the standard says);
- * byte_us: mbm_byte_us. The line is taken as silent since now. */
+/* The silence before a frame: 3.5 characters, fixed at 1750 us above 19200
+ * baud (as the standard says). One formula for the master and the cycle. */
+#define MBM_GAP_US(baud, bits)                                                                     \
+	((baud) > 19200u ? 1750u : (7u * (((bits)*1000000u + (baud)-1u) / (baud)) + 1u) / 2u)
+/* gap: MBM_GAP_US; byte_us: mbm_byte_us. The line is taken as silent since
+ * now. */
 void mbm_init(mbm_t *m, const mbm_port_t *port, uint32_t baud, uint32_t frame_bits,
 	      uint32_t timeout_us, uint8_t retries, uint32_t now_us);
 /* Starts a request (only when none is under way: false otherwise). Read:
@@ -156,19 +160,19 @@ typedef struct {
 } mbd_bus_t;
 
 /* The drive cycle when every drive answers, us: each drive's speed write
- * and sample reads at baud, with the 3.5-character gap after each frame
- * and turnaround_us for the drive to start its answer. */
+ * and sample reads at baud, each request after the gap the master waits
+ * (MBM_GAP_US) and turnaround_us for the drive to start its answer. */
 uint32_t mbd_cycle_us(const mb_profile_t *p, unsigned ndrives, uint32_t baud, uint32_t frame_bits,
 		      uint32_t turnaround_us);
 /* The same at compile time, for a board whose drives all take the same
  * requests: half-characters and requests per drive (the generic profile:
- * a 16 write of 13 bytes and its 8, a 03 read of 8 and its 13, each with
- * the 3.5-character gap: MBD_GENERIC_HALFCHARS, MBD_GENERIC_REQUESTS). */
+ * a 16 write of 13 bytes and its 8, a 03 read of 8 and its 13:
+ * MBD_GENERIC_HALFCHARS, MBD_GENERIC_REQUESTS). */
 #define MBD_CYCLE_US(nd, half, reqs, baud, bits, turn_us)                                          \
 	((uint32_t)(((uint64_t)(nd) * (half) * (bits)*1000000u + (uint64_t)2u * (baud)-1u) /       \
 		    ((uint64_t)2u * (baud))) +                                                     \
-	 (nd) * (reqs) * (turn_us))
-#define MBD_GENERIC_HALFCHARS 98u
+	 (nd) * (reqs) * ((turn_us) + MBM_GAP_US(baud, bits)))
+#define MBD_GENERIC_HALFCHARS 84u
 #define MBD_GENERIC_REQUESTS  2u
 /* The rule of mbd_check: one cycle and a request that fails with every
  * retry fit within the drive timeout twice over. */

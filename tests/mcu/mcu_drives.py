@@ -66,7 +66,7 @@ DRIVE_TIMEOUT_MS = 5000
 TIMEOUT_MS = 1000  # a request's answer (BOARD_MB_TIMEOUT_US)
 RETRIES = 1
 MBD_PROBE_MS = 200  # a silent drive's probe (hal/modbus/mbmaster.h)
-CYCLE_CALC_US = 12507  # mbd_cycle_us: two drives at 115200 baud
+CYCLE_CALC_US = 18292  # mbd_cycle_us: two drives at 115200 baud
 COUNT_MM = 150 * 3.141592653589793 / 16384
 WINDOW_MM = 0.05  # position_window_mm
 
