@@ -27,34 +27,33 @@ uint32_t systick_count(void)
 	return periods;
 }
 
-uint32_t systick_cycles(void)
+/* The periods counted and the counter, read together: with interrupts
+ * held, a wrap not yet counted by the handler shows as PENDSTSET; count it
+ * here, and read the counter again after it. */
+static uint32_t snapshot(uint32_t *v)
 {
-	uint32_t primask, p, v;
+	uint32_t primask, p;
 
-	/* With interrupts held, a wrap not yet counted by the handler shows as
-	 * PENDSTSET: count it here, and read the counter again after it. */
 	__asm volatile("mrs %0, primask\n\tcpsid i" : "=r"(primask)::"memory");
 	p = periods;
-	v = SYST_CVR;
+	*v = SYST_CVR;
 	if (SCB_ICSR & ICSR_PENDSTSET) {
 		p++;
-		v = SYST_CVR;
+		*v = SYST_CVR;
 	}
 	__asm volatile("msr primask, %0" ::"r"(primask) : "memory");
+	return p;
+}
+
+uint32_t systick_cycles(void)
+{
+	uint32_t v, p = snapshot(&v);
 	return p * period_cycles + (period_cycles - 1u - v);
 }
 
 uint32_t systick_us(void)
 {
-	uint32_t primask, p, v;
-	__asm volatile("mrs %0, primask\n\tcpsid i" : "=r"(primask)::"memory");
-	p = periods;
-	v = SYST_CVR;
-	if (SCB_ICSR & ICSR_PENDSTSET) {
-		p++;
-		v = SYST_CVR;
-	}
-	__asm volatile("msr primask, %0" ::"r"(primask) : "memory");
+	uint32_t v, p = snapshot(&v);
 	return p * (period_cycles / CYCLES_PER_US) + (period_cycles - 1u - v) / CYCLES_PER_US;
 }
 
