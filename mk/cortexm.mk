@@ -107,7 +107,8 @@ mcu_objs = $(patsubst %.c,$(MCU)/obj/%.o,$(1))
 MCU_NO_LTO := $(MCU)/obj/hal/cortexm/small_libc.o $(MCU)/obj/hal/cortexm/udivmod64.o
 $(MCU_NO_LTO): MCU_OBJ_FLAGS := -fno-lto
 
-$(MCU)/obj/%.o: %.c
+# The flags are this file's: a change to them rebuilds the objects.
+$(MCU)/obj/%.o: %.c mk/cortexm.mk
 	@mkdir -p $(dir $@)
 	@$(if $(Q),echo "  CC      $@")
 	$(Q)$(ARM_CC) $(MCU_CFLAGS_$(firstword $(subst /, ,$<))) $(MCU_OBJ_FLAGS) $(EXTRA_CFLAGS) \
