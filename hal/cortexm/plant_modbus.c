@@ -96,7 +96,7 @@ static uint8_t tx_n, tx_at;
  * monitor, as board_cost (tests/mcu/mcu_drives.py). */
 typedef struct {
 	uint32_t polls, poll_worst;
-	uint32_t fault_us; /* when the tick first found a fault active (0: not yet) */
+	uint32_t fault_tick; /* the unit's tick that first found a fault active (0: not yet) */
 } plant_cost_t;
 volatile plant_cost_t plant_cost;
 static const vehicle_t *unit;
@@ -243,8 +243,8 @@ void plant_start(vehicle_t *v)
 void plant_tick(void)
 {
 	wdog_feed();
-	if (!plant_cost.fault_us && alarm_any_fault(&unit->alarms))
-		plant_cost.fault_us = now_us() | 1u;
+	if (!plant_cost.fault_tick && alarm_any_fault(&unit->alarms))
+		plant_cost.fault_tick = unit->ticks;
 }
 
 void plant_poll(void)
