@@ -12,6 +12,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <poll.h>
+#include <pty.h>
 #include <setjmp.h>
 #include <signal.h>
 #include <stdarg.h>
@@ -950,6 +951,43 @@ static void test_killed_master_stops_drives(void **state)
 	    strstr(log, "mbdrive-sim: unit 2: no request for " COMM_MS_S " ms: motors stopped\n"));
 }
 
+/* The line's other end closes (a pty's master, as a bench's relay ends):
+ * the simulator says so and ends, where it used to spin on the hung-up
+ * line for ever. */
+static void test_sim_ends_when_the_line_hangs_up(void **state)
+{
+	(void)state;
+	int m = -1, s = -1;
+	char name[128];
+	assert_int_equal(openpty(&m, &s, name, NULL, NULL), 0);
+	/* the simulator must not hold the master too */
+	assert_int_equal(fcntl(m, F_SETFD, FD_CLOEXEC), 0);
+	assert_int_equal(fcntl(s, F_SETFD, FD_CLOEXEC), 0);
+	char exe[700];
+	snprintf(exe, sizeof(exe), "%s/mbdrive-sim", FW_BUILD_DIR);
+	char *sm[] = {exe, "--port", name, "--units", "1,2", NULL};
+	unlink(SIM_LOGPATH);
+	pid_t p = spawn(SIM_LOGPATH, sm, NULL);
+	fw_sleep_ms(200); /* the simulator opens its port */
+	close(m);
+	close(s);
+	int status = -1;
+	pid_t w = 0;
+	for (int i = 0; i < 500 && (w = waitpid(p, &status, WNOHANG)) == 0; i++)
+		fw_sleep_ms(10);
+	if (w != p)
+		kill(p, SIGKILL);
+	assert_int_equal(w, p);
+	assert_true(WIFEXITED(status));
+	assert_int_equal(WEXITSTATUS(status), 0);
+	char log[4096];
+	FILE *f = fopen(SIM_LOGPATH, "r");
+	assert_non_null(f);
+	log[fread(log, 1, sizeof(log) - 1, f)] = '\0';
+	fclose(f);
+	assert_string_equal(log, "mbdrive-sim: the line hung up\n");
+}
+
 /* SIGTERM after a 300 mm move; the registers vehicle-fw left. */
 static void move_then_exit(void)
 {
@@ -1110,6 +1148,7 @@ int main(int argc, char **argv)
 	    cmocka_unit_test_setup_teardown(test_defined_profile_registers, setup_defined,
 					    teardown),
 	    cmocka_unit_test_setup_teardown(test_io_without_gpio, setup_io_modbus, teardown),
+	    cmocka_unit_test(test_sim_ends_when_the_line_hangs_up),
 	};
 	if (fw_rig_init(argc > 0 ? argv[0] : NULL, "vsmb") < 0)
 		return 1;

@@ -547,6 +547,12 @@ int main(int argc, char **argv)
 			continue;
 		}
 		ssize_t r = read(fd, q + have, sizeof(q) - (size_t)have);
+		if ((r < 0 && errno == EIO) || (r == 0 && (p[0].revents & POLLHUP))) {
+			/* the line's other end closed (a pty's): poll would
+			 * return at once for ever */
+			fprintf(stderr, "mbdrive-sim: the line hung up\n");
+			break;
+		}
 		if (r <= 0)
 			continue;
 		have = take_requests(m, fd, q, have + (int)r, u, nu, bat, bat_silent);

@@ -509,8 +509,7 @@ def c_move(b):
     assert cyc[2] > 10
     # The tick's and the requests' rules with the master polled between
     # ticks. The master's worst poll holds a relay's stop and the time QEMU
-    # credits the board for it (DriveBoard): shown, not judged; its own
-    # cost is make bench's (docs/mcu.md).
+    # credits the board for it (DriveBoard): shown, not judged.
     k = b.costs()
     print("  board: worst tick %d cycles (%d instructions, %.1f %% of a 1 ms period at 25 MHz), "
           "worst request %d cycles (%.0f %%), master's worst poll %d cycles, %d ticks" % (
