@@ -117,6 +117,33 @@ enum {
 };
 
 typedef struct {
+	/* The byte-wide state first: a Cortex-M loads or stores a byte with a
+	 * 16-bit instruction only within 32 bytes of the struct (the unit's
+	 * code reaches the first 8 through struct vehicle, vehicle.h). */
+	uint8_t mode;  /* motion_mode_t */
+	bool paused;   /* held by pause (decelerating or stopped) */
+	bool stopping; /* stop(): decelerating, then discard */
+	bool joystick; /* joystick enabled */
+	uint8_t q_head, q_count;
+	bool lim_ok;   /* lim_* below hold for the active piece */
+	bool jerk_any; /* a jerk is set or limited (j*_pt3 below) */
+	/* The profile flags a drop clears together (plan_drop): one word. */
+	bool sc_on; /* the planned jerk-limited profile runs */
+	bool ln_on, glide, hold_on;
+	uint8_t stop_drop;   /* commands stop() discards once at rest (the first) */
+	bool rest_tick;	     /* a piece or (jerk limits) a motion stopped: the next
+				tick stands still */
+	uint8_t plan_budget; /* commands a pass walks per call (0: all) */
+	uint8_t pass_todo;   /* the queue's first pass_todo commands await the pass */
+	bool fresh, face_ok;
+	uint8_t ln_i, ln_next; /* ln_next: LN_NEXT_* */
+	/* The continuous goal (below): its position reached; a differential
+	 * base backing toward it; per axis of its law under jerk limits the
+	 * direction its tail to rest runs in, that tail running, and its
+	 * being an S-curve from rest. */
+	bool goal_position_done, goal_reverse;
+	int8_t sk_sg[2];
+	bool sk_on[2], sk_rest[2];
 	motion_params_t p;
 	/* Settings in per-tick units (derived once per change). */
 	q32_t v_t_pt, v_r_pt, a_t_pt2, a_r_pt2;
@@ -126,20 +153,7 @@ typedef struct {
 
 	fx_pose_t ref;	/* reference (commanded) pose */
 	fx_twist_t vel; /* current commanded body velocity */
-	uint8_t mode;	/* motion_mode_t */
-	bool paused;	/* held by pause (decelerating or stopped) */
-	bool stopping;	/* stop(): decelerating, then discard */
-	bool joystick;	/* joystick enabled */
-	bool lim_ok;	/* lim_* below hold for the active piece */
-	bool jerk_any;	/* a jerk is set or limited (j*_pt3 below) */
-
-	uint8_t q_head, q_count;
-	uint8_t stop_drop;   /* commands stop() discards once at rest (the first) */
-	bool rest_tick;	     /* a piece or (jerk limits) a motion stopped: the next
-				tick stands still */
-	q32_t pass_vt;	     /* the line speed the corner speeds were planned for */
-	uint8_t plan_budget; /* commands a pass walks per call (0: all) */
-	uint8_t pass_todo;   /* the queue's first pass_todo commands await the pass */
+	q32_t pass_vt;	/* the line speed the corner speeds were planned for */
 
 	seg_t seg; /* active piece (mode PATH) */
 	q32_t v;   /* speed along the active piece, per tick */
@@ -176,8 +190,6 @@ typedef struct {
 	uint32_t jog_timeout_ticks, jog_age_ticks;
 	/* Continuous mode goal (world frame). */
 	fx_pose_t goal;
-	bool goal_position_done;
-	bool goal_reverse; /* differential base: backing toward the goal */
 	/* The continuous goal under jerk limits (motion_seek.c): the mecanum
 	 * axes' speeds, last changes and (Q30) direction; per axis the tail
 	 * to rest running (sk_on, in lnb[i]), the cap it was planned under
@@ -185,13 +197,6 @@ typedef struct {
 	q32_t sk_v[2], sk_a[2], sk_cap[2];
 	int64_t sk_dip[2]; /* the dips' bound in ticks: translation, rotation */
 	int32_t sk_c, sk_s;
-	/* The profile flags a drop clears together (plan_drop): one word. */
-	bool sc_on; /* the planned jerk-limited profile runs */
-	bool ln_on, glide, hold_on;
-	int8_t sk_sg[2];
-	bool sk_on[2], sk_rest[2]; /* sk_rest: the tail is an S-curve from rest */
-	bool fresh, face_ok;
-	uint8_t ln_i, ln_next; /* ln_next: LN_NEXT_* */
 
 	/* The large members last: a Cortex-M loads a 64-bit member in one
 	 * instruction only within 1020 bytes of the struct (ldrd), and the

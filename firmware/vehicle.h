@@ -180,14 +180,9 @@ bool vehicle_motion_refused(vehicle_t *v, const char *op, bool velocity_mode);
 /* Implementation detail: static allocation by the caller, fields private. */
 struct vehicle {
 	vs_hal_t hal;
-	motion_t motion; /* first: its scalars within reach of one load (motion.h) */
-	kin_t kin;
-	fx_pose_t odom;
-	fx_trig_cache_t odom_trig; /* odometry's last heading */
+	/* The byte-wide state next: within the 32 bytes a Cortex-M reaches
+	 * with a 16-bit byte load or store (motion.h). */
 	uint8_t naxes;
-	/* Settings in force (interface units, as accepted). */
-	vs_velocity_t vel_set, acc_set;
-	int16_t jog_timeout_ms;
 	/* Unit state. */
 	bool powered, servo, locked, stuck, sensor_lock, joystick_on;
 	/* The stick may drive: it was seen at neutral since the last stop,
@@ -197,12 +192,21 @@ struct vehicle {
 	 * servo_wait_ticks so far); a drive that restarted lost its count:
 	 * motion is refused until setPosition (pose_lost). */
 	bool servo_wait, pose_lost;
+	bool have_now;
+	uint8_t link_last; /* vs_link_id_t heard last */
+	/* Supervision's last inputs. */
+	bool contact_prev, obstacle_prev, caution_prev, battery_low_armed;
+	motion_t motion; /* first of the rest: its scalars within reach of one load (motion.h) */
+	kin_t kin;
+	fx_pose_t odom;
+	fx_trig_cache_t odom_trig; /* odometry's last heading */
+	/* Settings in force (interface units, as accepted). */
+	vs_velocity_t vel_set, acc_set;
+	int16_t jog_timeout_ms;
 	uint32_t servo_wait_ticks, servo_on_timeout_ticks;
 	uint32_t out_shadow[VS_MAX_IO];
 	uint32_t ticks, overruns, last_now_us;
 	uint32_t late_ticks, max_late_us, loop_late_us;
-	bool have_now;
-	uint8_t link_last; /* vs_link_id_t heard last */
 	uint32_t link_timeout_ticks, link_silent_ticks;
 	int32_t wheel_cps_q8[VS_MAX_AXES];
 	fx_twist_t cmd;
@@ -223,7 +227,6 @@ struct vehicle {
 	q32_t caution_vel_t; /* mm/s, Q32 */
 	int32_t joystick_deadband_q15;
 	/* Supervision. */
-	bool contact_prev, obstacle_prev, caution_prev, battery_low_armed;
 	uint32_t drive_silent_ticks[VS_MAX_AXES];
 	uint16_t drive_fault_reported[VS_MAX_AXES]; /* fault code already raised */
 	bool drive_timeout_reported[VS_MAX_AXES];
