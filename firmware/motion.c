@@ -5,14 +5,16 @@
 
 static void per_tick(motion_t *m)
 {
-	int64_t hz = m->p.tick_hz;
-	/* Per-tick values round down so a set limit is never exceeded. */
+	int64_t hz = m->p.tick_hz, hz2 = hz * hz, hz3 = hz2 * hz;
+	/* Per-tick values round down so a set limit is never exceeded. One
+	 * division by hz^n is n by hz (truncations compose for positive
+	 * divisors; hz^3 <= 10^12): a 64-bit division is a call on a board. */
 	m->vmax_t_pt = m->p.vel_limit_t / hz;
 	m->vmax_r_pt = m->p.vel_limit_r / hz;
-	m->amax_t_pt2 = m->p.acc_limit_t / hz / hz;
-	m->amax_r_pt2 = m->p.acc_limit_r / hz / hz;
-	m->jmax_t_pt3 = m->p.jerk_limit_t / hz / hz / hz;
-	m->jmax_r_pt3 = m->p.jerk_limit_r / hz / hz / hz;
+	m->amax_t_pt2 = m->p.acc_limit_t / hz2;
+	m->amax_r_pt2 = m->p.acc_limit_r / hz2;
+	m->jmax_t_pt3 = m->p.jerk_limit_t / hz3;
+	m->jmax_r_pt3 = m->p.jerk_limit_r / hz3;
 	m->jerk_any = (m->jmax_t_pt3 | m->jmax_r_pt3) != 0;
 }
 
@@ -37,9 +39,9 @@ void motion_set_velocity(motion_t *m, q32_t vt, q32_t vr)
 
 void motion_set_accel(motion_t *m, q32_t at, q32_t ar)
 {
-	int64_t hz = m->p.tick_hz;
-	m->a_t_pt2 = at / hz / hz;
-	m->a_r_pt2 = ar / hz / hz;
+	int64_t hz2 = (int64_t)m->p.tick_hz * m->p.tick_hz; /* as per_tick */
+	m->a_t_pt2 = at / hz2;
+	m->a_r_pt2 = ar / hz2;
 	if (m->a_t_pt2 < 1)
 		m->a_t_pt2 = 1;
 	if (m->a_r_pt2 < 1)
@@ -56,9 +58,9 @@ void motion_set_accel(motion_t *m, q32_t at, q32_t ar)
 
 void motion_set_jerk(motion_t *m, q32_t jt, q32_t jr)
 {
-	int64_t hz = m->p.tick_hz;
-	m->j_t_pt3 = jt / hz / hz / hz;
-	m->j_r_pt3 = jr / hz / hz / hz;
+	int64_t hz = m->p.tick_hz, hz3 = hz * hz * hz; /* as per_tick */
+	m->j_t_pt3 = jt / hz3;
+	m->j_r_pt3 = jr / hz3;
 	m->jerk_any = (m->j_t_pt3 | m->j_r_pt3 | m->jmax_t_pt3 | m->jmax_r_pt3) != 0;
 	limits_changed(m);
 	/* A continuous goal under way takes up the jerk-limited law from its
