@@ -3,7 +3,7 @@
 
 #include <stddef.h>
 
-void bbox_init(blackbox_t *b, bbox_sample_t *buf, uint16_t cap, uint16_t every)
+FX_OUTLINE void bbox_init(blackbox_t *b, bbox_sample_t *buf, uint16_t cap, uint16_t every)
 {
 	b->buf = buf;
 	b->cap = buf ? cap : 0;

@@ -38,7 +38,7 @@ uint64_t fx_mulhi_u64_portable(uint64_t x, uint64_t y)
 /* floor(sqrt(v)) for v < 2^32, by Newton's iteration from 2^ceil(bits / 2):
  * it falls monotonically onto the root in a few steps, each a hardware
  * division on a 32-bit microcontroller. */
-static uint32_t isqrt32(uint32_t v)
+static FX_OUTLINE uint32_t isqrt32(uint32_t v)
 {
 	if (v < 2)
 		return v;
@@ -72,7 +72,7 @@ uint64_t fx_isqrt64(uint64_t v)
 /* n / d for a divisor below 2^16, in four 32-bit divisions of 16 bits
  * each: the same quotient as the 64-bit division, which on a 32-bit
  * microcontroller is a library call of some 100 instructions. */
-uint64_t fx_udiv64_small(uint64_t n, uint32_t d)
+FX_OUTLINE uint64_t fx_udiv64_small(uint64_t n, uint32_t d)
 {
 	uint64_t q = 0;
 	uint32_t r = 0;

@@ -56,6 +56,14 @@ uint64_t fx_udiv64_small(uint64_t n, uint32_t d);
 #define FX_HELPER static inline
 #endif
 
+/* An external function's copies inlined where it is called cost more flash
+ * than the calls: out of line where code size counts. */
+#ifdef __OPTIMIZE_SIZE__
+#define FX_OUTLINE __attribute__((noinline))
+#else
+#define FX_OUTLINE
+#endif
+
 /* n / d for n >= 0, d > 0. On a 32-bit core a 64-bit division is a library
  * call of some 100 instructions; when both fit 32 bits, the core divides. */
 FX_HELPER int64_t fx_div_nn(int64_t n, int64_t d)

@@ -30,7 +30,7 @@ void motion_init(motion_t *m, const motion_params_t *p)
 	m->jog_timeout_ticks = p->tick_hz / 2;
 }
 
-void motion_set_velocity(motion_t *m, q32_t vt, q32_t vr)
+FX_OUTLINE void motion_set_velocity(motion_t *m, q32_t vt, q32_t vr)
 {
 	m->v_t_pt = vt / m->p.tick_hz;
 	m->v_r_pt = vr / m->p.tick_hz;
@@ -69,7 +69,7 @@ void motion_set_jerk(motion_t *m, q32_t jt, q32_t jr)
 		motion_seek_retarget(m);
 }
 
-void motion_set_jog_timeout_ms(motion_t *m, uint32_t ms)
+FX_OUTLINE void motion_set_jog_timeout_ms(motion_t *m, uint32_t ms)
 {
 	m->jog_timeout_ticks = (uint32_t)(((uint64_t)ms * m->p.tick_hz + 999) / 1000);
 }

@@ -18,7 +18,7 @@ static q32_t corner_vrot(const motion_t *m, const motion_cmd_t *c)
 
 /* The square root and divisions are paid when the command is queued, not
  * in the tick that blends into it. */
-void motion_cruise_set_start(motion_cmd_t *c, q32_t sx, q32_t sy)
+FX_OUTLINE void motion_cruise_set_start(motion_cmd_t *c, q32_t sx, q32_t sy)
 {
 	c->sx_mm = sx;
 	c->sy_mm = sy;

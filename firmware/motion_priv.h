@@ -173,7 +173,7 @@ static inline q32_t piece_cout(motion_t *m)
 
 /* Whether the running plan is in its last ramp (the S-curve's, or the
  * line's into its end speed), where its speed only falls. */
-static inline bool last_ramp(const motion_t *m)
+FX_HELPER bool last_ramp(const motion_t *m)
 {
 	const traj_ln_t *ln = &m->lnb[m->ln_i];
 	return m->sc_on ? m->sc.k >= m->sc.nv : ln->k > ln->l1 + ln->hold;
@@ -232,7 +232,7 @@ static inline q32_t piece_limit(const seg_t *g, q32_t t, q32_t r)
 
 /* The active piece's jerk limit for translation and rotation jerks t, r
  * (0 = unlimited); 0 when neither limits it. */
-static inline q32_t piece_jerk(const seg_t *g, q32_t t, q32_t r)
+FX_HELPER q32_t piece_jerk(const seg_t *g, q32_t t, q32_t r)
 {
 	if (t == 0 && r == 0)
 		return 0;

@@ -69,7 +69,7 @@ typedef struct {
 
 /* x + y for x, y >= 0, saturating (with traj_mul_sat: a few compares where
  * the overflow builtins' 64-bit products cost a 32-bit core 0.5 KiB). */
-static int64_t add_sat(int64_t x, int64_t y)
+static FX_OUTLINE int64_t add_sat(int64_t x, int64_t y)
 {
 	return x > INT64_MAX - y ? INT64_MAX : x + y;
 }
