@@ -196,6 +196,25 @@ struct vehicle {
 	uint8_t link_last; /* vs_link_id_t heard last */
 	/* Supervision's last inputs. */
 	bool contact_prev, obstacle_prev, caution_prev, battery_low_armed;
+	/* The tick's words next: within the 124 bytes a Cortex-M reaches with
+	 * a 16-bit word load or store. */
+	uint32_t servo_wait_ticks, servo_on_timeout_ticks;
+	uint32_t ticks, overruns, last_now_us;
+	uint32_t late_ticks, max_late_us, loop_late_us;
+	uint32_t link_timeout_ticks, link_silent_ticks;
+	/* Supervision limits, fixed point, derived from cfg at init. */
+	uint32_t period_us;
+	uint32_t drive_timeout_ticks, encoder_stuck_ticks;
+	/* The commanded speed T (counts/s Q8) that must move the encoder, as
+	 * T - 1 and 2T - 1 (supervise_encoder's one compare). */
+	uint32_t encoder_stuck_off, encoder_stuck_span;
+	uint32_t window_ticks, settle_timeout_ticks;
+	uint32_t battery_low_mv, battery_critical_mv;
+	uint32_t battery_mv;
+	/* In position: ticks within the window, ticks at rest out of it
+	 * (past settle_timeout_ticks: warning 154 raised, taken as done). */
+	uint32_t inpos_ticks, settle_ticks;
+	int32_t wheel_cps_q8[VS_MAX_AXES];
 	motion_t motion; /* first of the rest: its scalars within reach of one load (motion.h) */
 	kin_t kin;
 	fx_pose_t odom;
@@ -203,38 +222,21 @@ struct vehicle {
 	/* Settings in force (interface units, as accepted). */
 	vs_velocity_t vel_set, acc_set;
 	int16_t jog_timeout_ms;
-	uint32_t servo_wait_ticks, servo_on_timeout_ticks;
 	uint32_t out_shadow[VS_MAX_IO];
-	uint32_t ticks, overruns, last_now_us;
-	uint32_t late_ticks, max_late_us, loop_late_us;
-	uint32_t link_timeout_ticks, link_silent_ticks;
-	int32_t wheel_cps_q8[VS_MAX_AXES];
 	fx_twist_t cmd;
 	fx_twist_t meas; /* the odometry's body displacement of the last tick */
 	/* Latest drive samples; .enabled also follows drive_enable commands. */
 	hal_drive_state_t drive[VS_MAX_AXES];
 	int32_t meas_counts[VS_MAX_AXES];
-	/* Supervision limits, fixed point, derived from cfg at init. */
-	uint32_t period_us;
-	uint32_t drive_timeout_ticks, encoder_stuck_ticks;
-	/* The commanded speed T (counts/s Q8) that must move the encoder, as
-	 * T - 1 and 2T - 1 (supervise_encoder's one compare). */
-	uint32_t encoder_stuck_off, encoder_stuck_span;
 	int64_t following_err_max_q32; /* counts (Q32) */
 	int64_t window_q32;	       /* position window, counts (Q32) */
-	uint32_t window_ticks, settle_timeout_ticks;
-	uint32_t battery_low_mv, battery_critical_mv;
-	q32_t caution_vel_t; /* mm/s, Q32 */
+	q32_t caution_vel_t;	       /* mm/s, Q32 */
 	int32_t joystick_deadband_q15;
 	/* Supervision. */
 	uint32_t drive_silent_ticks[VS_MAX_AXES];
 	uint16_t drive_fault_reported[VS_MAX_AXES]; /* fault code already raised */
 	bool drive_timeout_reported[VS_MAX_AXES];
 	uint32_t encoder_still_ticks[VS_MAX_AXES];
-	uint32_t battery_mv;
-	/* In position: ticks within the window, ticks at rest out of it
-	 * (past settle_timeout_ticks: warning 154 raised, taken as done). */
-	uint32_t inpos_ticks, settle_ticks;
 	char state_msg[VS_STATE_MSG_MAX];
 	/* Large and seldom read: last. */
 	blackbox_t bbox;
