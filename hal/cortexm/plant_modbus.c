@@ -87,7 +87,9 @@ typedef struct {
 #define ST_TX_FULL 1u
 #define ST_RX_FULL 2u
 
-static mb_profile_t prof;
+/* The generic profile with its communication-loss stop (u16, ms), compiled
+ * in: the master reads it as constants (MBD_PROFILE, mk/cortexm.mk). */
+const mb_profile_t board_mb_profile = MBP_GENERIC(1);
 static const uint8_t *tx_buf; /* the master's frame: it stays put until sent */
 static uint8_t tx_n, tx_at;
 
@@ -207,13 +209,11 @@ void plant_config(vs_config_t *cfg)
 
 vs_hal_t plant_hal(const vs_config_t *cfg)
 {
-	prof = *mbp_builtin_at(0); /* generic */
-	prof.reg[MBP_COMM_TIMEOUT] = (mbp_reg_t){0x109, 0, 1, 0};
 	MBU->bauddiv = BOARD_CPU_HZ / BOARD_MB_BAUD;
 	MBU->ctrl = 3u;
 	FPGAIO_LED = 0;
-	mbd_init(&plant_bus, &prof, &port, BOARD_MB_BAUD, MB_FRAME_BITS, MB_TIMEOUT_US, MB_RETRIES,
-		 now_us());
+	mbd_init(&plant_bus, &board_mb_profile, &port, BOARD_MB_BAUD, MB_FRAME_BITS, MB_TIMEOUT_US,
+		 MB_RETRIES, now_us());
 	plant_bus.comm_timeout_ms = MB_COMM_STOP_MS;
 	plant_bus.m.byte_us = MB_BYTE_US;
 	for (unsigned i = 0; i < MB_DRIVES; i++)

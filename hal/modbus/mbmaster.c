@@ -3,6 +3,14 @@
 
 enum { ST_IDLE, ST_GAP, ST_TX, ST_WAIT };
 
+/* The bus's profile: on a board that compiles it in (MBD_PROFILE,
+ * mbmaster.h), its reads are constants the compiler folds. */
+#ifdef MBD_PROFILE
+#define BUS_PROF(b) (&MBD_PROFILE)
+#else
+#define BUS_PROF(b) ((b)->prof)
+#endif
+
 uint32_t mbm_char_us(uint32_t baud, uint32_t frame_bits)
 {
 	return (frame_bits * 1000000u + baud - 1u) / baud;
@@ -287,7 +295,7 @@ unsigned mbd_add(mbd_bus_t *b, uint8_t unit, uint8_t ch, bool reverse)
 
 static bool write_reg(mbd_bus_t *b, const mbd_drive_t *d, unsigned r, int32_t v)
 {
-	const mbp_reg_t *g = &b->prof->reg[r];
+	const mbp_reg_t *g = &BUS_PROF(b)->reg[r];
 	uint16_t w[2];
 	mbp_put(g, v, w);
 	return mbm_write(&b->m, d->unit, mbp_addr(g, d->ch), g->words, w);
@@ -297,7 +305,7 @@ static bool write_reg(mbd_bus_t *b, const mbd_drive_t *d, unsigned r, int32_t v)
  * the unit is commanded on. */
 static bool enable_wanted(const mbd_bus_t *b, const mbd_drive_t *d)
 {
-	if (b->prof->reg[MBP_ENABLE].step != 0)
+	if (BUS_PROF(b)->reg[MBP_ENABLE].step != 0)
 		return d->cmd_enable;
 	for (unsigned i = 0; i < b->nd; i++)
 		if (b->d[i].unit == d->unit && !b->d[i].cmd_enable)
@@ -308,7 +316,7 @@ static bool enable_wanted(const mbd_bus_t *b, const mbd_drive_t *d)
 /* The next request of drive d's cycle; false when the cycle is complete. */
 static bool issue(mbd_bus_t *b, mbd_drive_t *d)
 {
-	const mb_profile_t *p = b->prof;
+	const mb_profile_t *p = BUS_PROF(b);
 	for (;;) {
 		switch (b->step) {
 		case DS_INIT:
@@ -376,13 +384,13 @@ static void step_done(mbd_bus_t *b, mbd_drive_t *d)
 	case DS_SPEED:
 		b->step = DS_READ;
 		b->sub = 0;
-		b->nrd = (uint8_t)mbp_read_plan(b->prof, d->ch, MBM_READ_MAX, b->rd);
+		b->nrd = (uint8_t)mbp_read_plan(BUS_PROF(b), d->ch, MBM_READ_MAX, b->rd);
 		break;
 	default: { /* DS_READ */
 		uint16_t regs[MBM_READ_MAX];
 		for (unsigned i = 0; i < b->rd[b->sub].n; i++)
 			regs[i] = mbm_reg(&b->m, i);
-		mbp_take_read(b->prof, d->ch, &b->rd[b->sub], regs, b->val);
+		mbp_take_read(BUS_PROF(b), d->ch, &b->rd[b->sub], regs, b->val);
 		b->sub++;
 		break;
 	}
@@ -414,7 +422,7 @@ static bool step_failed(mbd_bus_t *b, mbd_drive_t *d, uint8_t r, uint32_t now_us
 
 static void publish(mbd_bus_t *b, mbd_drive_t *d, uint32_t now_us)
 {
-	mbp_sample_set(b->prof, &d->s, b->val);
+	mbp_sample_set(BUS_PROF(b), &d->s, b->val);
 	d->silent = false;
 	d->last_ok_us = now_us;
 	d->samples++;
@@ -488,13 +496,13 @@ void mbd_reset_fault(void *ctx, uint8_t axis)
 void mbd_read(void *ctx, uint8_t axis, hal_drive_state_t *st)
 {
 	mbd_bus_t *b = ctx;
-	mbp_report(b->prof, &b->d[axis].s, b->d[axis].reverse, st);
+	mbp_report(BUS_PROF(b), &b->d[axis].s, b->d[axis].reverse, st);
 }
 
 size_t mbd_off_frame(const mbd_bus_t *b, unsigned i, uint8_t *f)
 {
-	const mbp_reg_t *g = &b->prof->reg[MBP_ENABLE];
+	const mbp_reg_t *g = &BUS_PROF(b)->reg[MBP_ENABLE];
 	uint16_t w[2];
-	mbp_put(g, b->prof->enable_off, w);
+	mbp_put(g, BUS_PROF(b)->enable_off, w);
 	return frame_write(f, b->d[i].unit, mbp_addr(g, b->d[i].ch), g->words, w);
 }

@@ -81,6 +81,26 @@ typedef struct {
 	} init[MBP_INIT_MAX];
 } mb_profile_t;
 
+/* The generic profile's initialiser (mbprofile.c: the map of mbdrive-sim),
+ * with its communication timeout at 0x109 of ct_words words (0: none): a
+ * board that compiles its profile in starts from it. */
+#define MBP_GENERIC(ct_words)                                                                      \
+	{                                                                                          \
+		.name = "generic", .channels = 1, .block = 8,                                      \
+		.reg =                                                                             \
+		    {                                                                              \
+			[MBP_SPEED] = {0x100, 0, 2, MBP_SIGNED},                                   \
+			[MBP_POSITION] = {0x102, 0, 2, MBP_SIGNED},                                \
+			[MBP_STATUS] = {0x104, 0, 1, 0},                                           \
+			[MBP_ALARM] = {0x105, 0, 1, 0},                                            \
+			[MBP_ENABLE] = {0x106, 0, 1, 0},                                           \
+			[MBP_RESET] = {0x107, 0, 1, 0},                                            \
+			[MBP_COMM_TIMEOUT] = {0x109, 0, (ct_words), 0},                            \
+		    },                                                                             \
+		.speed_num = 1, .speed_den = 1, .status_mask = 1, .enable_on = 1, .enable_off = 0, \
+		.reset_value = 1, .comm_unit_ms = 1,                                               \
+	}
+
 /* The built-in profiles by name (mbprofile.c: generic, zlac8015d); NULL
  * when unknown. */
 const mb_profile_t *mbp_builtin(const char *name);
