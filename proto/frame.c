@@ -4,41 +4,43 @@
 
 #include <string.h>
 
-size_t frame_encode(uint8_t *out, size_t cap, uint8_t seq, uint8_t op, const uint8_t *payload,
-		    size_t len)
+/* Header and CRC around the len payload bytes already at out + FRAME_HDR:
+ * one copy for requests, answers and stream frames. */
+static size_t frame_wrap(uint8_t *out, uint8_t seq, uint8_t op, size_t len)
 {
-	uint16_t crc;
-
-	if (len > 0xFFFFu || cap < FRAME_OVERHEAD || cap - FRAME_OVERHEAD < len)
-		return 0;
 	out[0] = FRAME_SYNC;
 	wire_put_u16(out + 1, (uint16_t)len);
 	out[3] = seq;
 	out[4] = op;
+	wire_put_u16(out + FRAME_HDR + len, cmd_crc16(0xFFFF, out + 1, FRAME_HDR - 1 + len));
+	return FRAME_OVERHEAD + len;
+}
+
+/* A frame of len payload bytes fits cap and its length field. */
+static bool frame_fits(size_t cap, size_t len)
+{
+	return len <= 0xFFFFu && cap >= FRAME_OVERHEAD && cap - FRAME_OVERHEAD >= len;
+}
+
+size_t frame_encode(uint8_t *out, size_t cap, uint8_t seq, uint8_t op, const uint8_t *payload,
+		    size_t len)
+{
+	if (!frame_fits(cap, len))
+		return 0;
 	if (len)
 		memcpy(out + FRAME_HDR, payload, len);
-	crc = cmd_crc16(0xFFFF, out + 1, FRAME_HDR - 1 + len);
-	wire_put_u16(out + FRAME_HDR + len, crc);
-	return FRAME_OVERHEAD + len;
+	return frame_wrap(out, seq, op, len);
 }
 
 size_t frame_encode_response(uint8_t *out, size_t cap, uint8_t seq, uint8_t opcode, uint8_t status,
 			     const uint8_t *payload, size_t len)
 {
-	uint16_t crc;
-
-	if (len > 0xFFFEu || cap < FRAME_OVERHEAD + 1 || cap - FRAME_OVERHEAD - 1 < len)
+	if (len > 0xFFFEu || !frame_fits(cap, len + 1))
 		return 0;
-	out[0] = FRAME_SYNC;
-	wire_put_u16(out + 1, (uint16_t)(len + 1));
-	out[3] = seq;
-	out[4] = (uint8_t)(opcode | FRAME_RESP_FLAG);
-	out[5] = status;
+	out[FRAME_HDR] = status;
 	if (len)
 		memcpy(out + FRAME_HDR + 1, payload, len);
-	crc = cmd_crc16(0xFFFF, out + 1, FRAME_HDR + len);
-	wire_put_u16(out + FRAME_HDR + 1 + len, crc);
-	return FRAME_OVERHEAD + 1 + len;
+	return frame_wrap(out, seq, (uint8_t)(opcode | FRAME_RESP_FLAG), len + 1);
 }
 
 void frame_rx_init(frame_rx_t *rx, uint8_t *buf, size_t max_payload, frame_fn on_frame,
