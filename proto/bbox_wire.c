@@ -1,6 +1,7 @@
 /* The black box on the links, the unit's side (bbox_wire.h). */
 #include "bbox_wire.h"
 
+#include <stddef.h>
 #include <string.h>
 
 #include "console.h"
@@ -10,6 +11,29 @@
 
 _Static_assert(BBOX_RESP_MAX <= WIRE_RESP_MAX, "a page fits an answer");
 
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+/* A sample's memory is its layout on the wire, little-endian without gaps:
+ * one copy (0.2 KiB less flash on a board than field by field). */
+#define BBOX_AT(m, at) _Static_assert(offsetof(bbox_sample_t, m) == (at), #m " at its wire offset");
+BBOX_AT(ref, 0)
+BBOX_AT(odo, 24)
+BBOX_AT(cmd, 48)
+BBOX_AT(sp_q8, 72)
+BBOX_AT(enc, 88)
+BBOX_AT(tick, 104)
+BBOX_AT(newest_alarm, 108)
+BBOX_AT(state, 112)
+BBOX_AT(queue_len, 114)
+BBOX_AT(alarms, 115)
+#undef BBOX_AT
+_Static_assert(sizeof(fx_pose_t) == 24 && sizeof(fx_twist_t) == 24, "three Q32 each");
+_Static_assert(BBOX_SAMPLE_LEN == 116, "the sample's wire length");
+
+static void put_sample(uint8_t *p, const bbox_sample_t *s)
+{
+	memcpy(p, s, BBOX_SAMPLE_LEN);
+}
+#else
 static void put_i64(uint8_t *p, int64_t v)
 {
 	wire_put_u32(p, (uint32_t)((uint64_t)v & 0xFFFFFFFFu));
@@ -33,6 +57,7 @@ static void put_sample(uint8_t *p, const bbox_sample_t *s)
 	p[114] = s->queue_len;
 	p[115] = s->alarms;
 }
+#endif
 
 /* The samples this unit puts in an answer (a client takes up to BBOX_PAGE,
  * reading on from the count it got): a board answers fewer, as a page of
