@@ -187,8 +187,11 @@ static bool avail(const win_t *in, size_t n)
 	return in->len - in->pos >= n;
 }
 
-/* Copies a length-prefixed string into dst (room for max + 1). */
-static int get_str(win_t *in, char *dst, size_t max)
+/* Copies a length-prefixed string into dst (room for max + 1). Inline: a
+ * unit decodes requests only, without strings (wire_dispatch), and its
+ * copies then go with the paths that call them; out of line, the body
+ * stayed in a board's image uncalled. */
+static inline __attribute__((always_inline)) int get_str(win_t *in, char *dst, size_t max)
 {
 	size_t n;
 
