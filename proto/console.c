@@ -571,48 +571,43 @@ static bool exec_line(console_t *c, const char *line, size_t len, rbuf_t *r)
 				   d->name, d->n_in, d->n_in == 1 ? "" : "s", ntok - 1);
 
 	for (unsigned k = 0; k < d->n_in; k++) {
-		const char *tok = argv[k + 1];
-		const char *fn;
-		int fl = (int)cmd_field_name(d->in_names, k, &fn);
-		int64_t iv = 0;
-		np_result_t pr;
+		const char *tok = argv[k + 1], *fn, *why = NULL;
+		int fl = (int)cmd_field_name(d->in_names, k, &fn), code = CONSOLE_E_NUMBER;
+		char t = d->in_types[k];
+		bool sh = t == CMD_T_SHORT;
+		int64_t iv = 0, lo = sh ? INT16_MIN : 0, hi = sh ? INT16_MAX : (int64_t)UINT32_MAX;
 
-		switch (d->in_types[k]) {
-		case CMD_T_BOOL:
-			if (!np_parse_bool(tok, &in[k].b))
-				return reply_error(
-				    c, r, "%d %s %.*s: bad boolean %s (true|false|1|0|on|off)",
-				    CONSOLE_E_BOOL, d->name, fl, fn, tok);
-			break;
-		case CMD_T_DOUBLE:
+		if (t == CMD_T_BOOL) {
+			if (!np_parse_bool(tok, &in[k].b)) {
+				why = CONSOLE_BAD_BOOL;
+				code = CONSOLE_E_BOOL;
+			}
+		} else if (t == CMD_T_DOUBLE) {
 			if (np_parse_real(tok, &in[k].d) != NP_OK)
-				return reply_error(c, r, "%d %s %.*s: bad number %s",
-						   CONSOLE_E_NUMBER, d->name, fl, fn, tok);
-			break;
-		case CMD_T_SHORT:
-		case CMD_T_ULONG: {
-			bool sh = d->in_types[k] == CMD_T_SHORT;
-			int64_t lo = sh ? INT16_MIN : 0, hi = sh ? INT16_MAX : (int64_t)UINT32_MAX;
+				why = CONSOLE_BAD_NUMBER;
+		} else if (sh || t == CMD_T_ULONG) {
+			np_result_t pr = np_parse_int(tok, lo, hi, &iv);
 
-			pr = np_parse_int(tok, lo, hi, &iv);
-			if (pr == NP_SYNTAX)
-				return reply_error(c, r, "%d %s %.*s: bad number %s",
-						   CONSOLE_E_NUMBER, d->name, fl, fn, tok);
-			if (pr == NP_RANGE)
-				return reply_error(c, r,
-						   "%d %s %.*s: %s is not an integer in %lld..%lld",
-						   CONSOLE_E_RANGE, d->name, fl, fn, tok,
-						   (long long)lo, (long long)hi);
-			if (sh)
+			if (pr == NP_SYNTAX) {
+				why = CONSOLE_BAD_NUMBER;
+			} else if (pr == NP_RANGE) {
+				why = CONSOLE_NOT_INTEGER;
+				code = CONSOLE_E_RANGE;
+			} else if (sh) {
 				in[k].h = (int16_t)iv;
-			else
+			} else {
 				in[k].u = (uint32_t)iv;
-			break;
-		}
-		default:
+			}
+		} else {
 			/* The table never has other in types; refuse rather than guess. */
 			return reply_error(c, r, "%d %s: unsupported argument type",
 					   CONSOLE_E_NUMBER, d->name);
+		}
+		if (why) {
+			/* "CODE OP FIELD", then the text $config shares */
+			reply_error(c, r, "%d %s %.*s", code, d->name, fl, fn);
+			rb_printf(r, why, tok, (long long)lo, (long long)hi);
+			return true;
 		}
 	}
 

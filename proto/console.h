@@ -31,6 +31,13 @@ enum {
 	CONSOLE_E_EXTRA = 8,	  /* a '$' bring-up command failed */
 };
 
+/* A value that is not one, after "OP FIELD" (an operation's argument) or
+ * "$config NAME": one copy of each text for both. Arguments: the token,
+ * then the range's ends as long long. */
+#define CONSOLE_BAD_BOOL    ": bad boolean %s (true|false|1|0|on|off)"
+#define CONSOLE_BAD_NUMBER  ": bad number %s"
+#define CONSOLE_NOT_INTEGER ": %s is not an integer in %lld..%lld"
+
 typedef void (*console_write_fn)(void *ctx, const char *s, size_t n);
 /* Handles a '$' command the console itself does not know. Returns false if
  * it does not know it either. reply gets one line without the newline. */

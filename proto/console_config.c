@@ -152,20 +152,21 @@ static const vs_config_field_t *find_field(const char *arg, int *elem)
  * with the error in o. */
 static bool parse_value(out_t *o, const vs_config_field_t *f, const char *tok, void *v)
 {
-	int64_t iv = 0;
+	int64_t iv = 0, hi = f->type == VS_CFG_U16 ? UINT16_MAX : (int64_t)UINT32_MAX;
+	const char *why = CONSOLE_BAD_NUMBER; /* the text the console's operations share */
+	int code = CONSOLE_E_NUMBER;
 	np_result_t r;
 	switch (f->type) {
 	case VS_CFG_DOUBLE:
 		if (np_parse_real(tok, (vs_real_t *)v) == NP_OK)
 			return true;
-		fail(o, CONSOLE_E_NUMBER, "$config %s: bad number %s", f->name, tok);
-		return false;
+		break;
 	case VS_CFG_BOOL:
 		if (np_parse_bool(tok, (bool *)v))
 			return true;
-		fail(o, CONSOLE_E_BOOL, "$config %s: bad boolean %s (true|false|1|0|on|off)",
-		     f->name, tok);
-		return false;
+		why = CONSOLE_BAD_BOOL;
+		code = CONSOLE_E_BOOL;
+		break;
 	case VS_CFG_KIN:
 		if (np_streq_nocase(tok, "differential") || np_streq_nocase(tok, "mecanum")) {
 			*(vs_kinematics_t *)v =
@@ -176,11 +177,10 @@ static bool parse_value(out_t *o, const vs_config_field_t *f, const char *tok, v
 			*(vs_kinematics_t *)v = (vs_kinematics_t)iv;
 			return true;
 		}
-		fail(o, CONSOLE_E_RANGE, "$config %s: %s is not 0 (differential) or 1 (mecanum)",
-		     f->name, tok);
-		return false;
-	default: {
-		int64_t hi = f->type == VS_CFG_U16 ? UINT16_MAX : (int64_t)UINT32_MAX;
+		why = ": %s is not 0 (differential) or 1 (mecanum)";
+		code = CONSOLE_E_RANGE;
+		break;
+	default:
 		r = np_parse_int(tok, 0, hi, &iv);
 		if (r == NP_OK) {
 			if (f->type == VS_CFG_U16)
@@ -189,14 +189,15 @@ static bool parse_value(out_t *o, const vs_config_field_t *f, const char *tok, v
 				*(uint32_t *)v = (uint32_t)iv;
 			return true;
 		}
-		if (r == NP_SYNTAX)
-			fail(o, CONSOLE_E_NUMBER, "$config %s: bad number %s", f->name, tok);
-		else
-			fail(o, CONSOLE_E_RANGE, "$config %s: %s is not an integer in 0..%lld",
-			     f->name, tok, (long long)hi);
-		return false;
+		if (r == NP_RANGE) {
+			why = CONSOLE_NOT_INTEGER;
+			code = CONSOLE_E_RANGE;
+		}
+		break;
 	}
-	}
+	fail(o, code, "$config %s", f->name);
+	put(o, why, tok, (long long)0, (long long)hi);
+	return false;
 }
 
 /* A refused change: why, for what (a field's name or the subcommand). */
