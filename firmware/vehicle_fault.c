@@ -84,9 +84,9 @@ void vehicle_raise_fault_level(vehicle_t *v, uint32_t code, const char *text)
 	vehicle_raise_fault(v, code, text);
 }
 
-void vehicle_axis_text(char *s, size_t cap, const char *what, uint8_t axis, const char *tail)
+size_t vehicle_axis_text(char *s, size_t cap, const char *what, uint8_t axis, const char *tail)
 {
 	size_t pos = vehicle_put_str(s, cap, 0, what);
 	pos = vehicle_put_dec(s, cap, pos, axis, 1);
-	vehicle_put_str(s, cap, pos, tail);
+	return vehicle_put_str(s, cap, pos, tail);
 }

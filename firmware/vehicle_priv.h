@@ -16,8 +16,8 @@ size_t vehicle_put_str(char *b, size_t cap, size_t pos, const char *s);
 size_t vehicle_put_dec(char *b, size_t cap, size_t pos, uint32_t val, unsigned min_digits);
 size_t vehicle_put_hex4(char *b, size_t cap, size_t pos, uint16_t val);
 size_t vehicle_put_volts(char *b, size_t cap, size_t pos, uint32_t mv);
-/* "<what><axis><tail>" */
-void vehicle_axis_text(char *s, size_t cap, const char *what, uint8_t axis, const char *tail);
+/* "<what><axis><tail>"; returns its length. */
+size_t vehicle_axis_text(char *s, size_t cap, const char *what, uint8_t axis, const char *tail);
 
 /* Drives that report their state, their enable and a restart (hal.h): the
  * servo on waits for them, a drive leaving Operation enabled or restarting

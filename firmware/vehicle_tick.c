@@ -157,9 +157,7 @@ static COLD void drive_silent_report(vehicle_t *v, uint8_t i, uint8_t why)
 static COLD void drive_fault_report(vehicle_t *v, uint8_t i, uint16_t fc)
 {
 	char s[VS_ALARM_SOURCE_MAX];
-	size_t pos = vehicle_put_str(s, sizeof s, 0, "drive ");
-	pos = vehicle_put_dec(s, sizeof s, pos, i, 1);
-	pos = vehicle_put_str(s, sizeof s, pos, " fault ");
+	size_t pos = vehicle_axis_text(s, sizeof s, "drive ", i, " fault ");
 	vehicle_put_hex4(s, sizeof s, pos, fc);
 	vehicle_raise_fault(v, ALM_F_DRIVE, s);
 }
@@ -196,9 +194,7 @@ static COLD void drive_state_fault(vehicle_t *v, uint32_t code, uint8_t i, const
 	vehicle_raise_fault(v, code, s);
 	return;
 #endif
-	size_t pos = vehicle_put_str(s, sizeof s, 0, "drive ");
-	pos = vehicle_put_dec(s, sizeof s, pos, i, 1);
-	pos = vehicle_put_str(s, sizeof s, pos, what);
+	size_t pos = vehicle_axis_text(s, sizeof s, "drive ", i, what);
 	const char *ph = phase_name(v->drive[i].phase);
 	if (*ph) {
 		pos = vehicle_put_str(s, sizeof s, pos, ": ");
@@ -599,47 +595,43 @@ bool vehicle_in_position(const vehicle_t *v)
 	       v->settle_ticks > v->settle_timeout_ticks;
 }
 
-/* The state's code, its word and the alarm it names (NULL: none). */
-int16_t vehicle_state_of(const vehicle_t *v, const char **word, const vs_alarm_t **why)
+/* The state's code and the alarm it names (NULL: none). */
+static int16_t state_code(const vehicle_t *v, const vs_alarm_t **why)
 {
 	const vs_alarm_t *fault = alarm_newest(&v->alarms, VS_ALARM_FAULT);
 	/* Braking for a lock, an obstacle or a pause, or settling, the unit is
 	 * Busy: the state that follows is reported once the wheels are in
 	 * place. */
 	bool settled = vehicle_servo_waiting(v) || vehicle_in_position(v);
-	*why = NULL;
-	if (fault) {
-		*why = fault;
-		*word = "Alarm";
+	*why = fault;
+	if (fault)
 		return VS_STATE_ALARM;
-	}
-	if (!v->powered) {
-		*word = "Unpowered";
+	if (!v->powered)
 		return VS_STATE_UNPOWERED;
-	}
-	if (settled && v->locked) {
-		*word = "Locked";
+	if (settled && v->locked)
 		return VS_STATE_LOCKED;
-	}
-	if (settled && v->stuck) {
-		*word = "Stuck";
+	if (settled && v->stuck)
 		return VS_STATE_STUCK;
-	}
-	if (!v->servo) {
-		*word = "Powered";
+	if (!v->servo)
 		return VS_STATE_POWERED;
-	}
-	if (settled && motion_is_paused(&v->motion)) {
-		*word = "Paused";
+	if (settled && motion_is_paused(&v->motion))
 		return VS_STATE_PAUSED;
-	}
-	if (!settled || vehicle_servo_waiting(v) || motion_has_work(&v->motion)) {
-		*word = "Busy";
+	if (!settled || vehicle_servo_waiting(v) || motion_has_work(&v->motion))
 		return VS_STATE_BUSY;
-	}
 	*why = alarm_newest(&v->alarms, VS_ALARM_WARNING);
-	*word = *why ? "Warning" : "Ready";
 	return *why ? VS_STATE_WARNING : VS_STATE_READY;
+}
+
+/* The state's code, its word and the alarm it names (NULL: none). The
+ * words from one table by code (VS_STATE_READY up): a store of a literal
+ * per state cost more flash. */
+int16_t vehicle_state_of(const vehicle_t *v, const char **word, const vs_alarm_t **why)
+{
+	static const char *const words[] = {"Ready",  "Busy",  "Warning", "Alarm",   "Stuck",
+					    "Paused", "Avoid", "Locked",  "Powered", "Unpowered"};
+	int16_t code = state_code(v, why);
+	*word = words[code - VS_STATE_READY];
+	return code;
 }
 
 /* The tick's sample for the black box (vehicle_tick, when one is due). */
