@@ -41,8 +41,8 @@ static const char *refusal_reason(uint32_t code)
 {
 	const char *s = refusal_texts;
 	uint32_t n = code - ALM_W_BAD_ARGUMENT;
-	/* Beyond the last text the walk would reach the string's own end. */
-	if (code < ALM_W_BAD_ARGUMENT || code > ALM_W_BAD_ARGUMENT + 22u)
+	/* Beyond the last text the walk stops at the string's own end. */
+	if (code < ALM_W_BAD_ARGUMENT)
 		return "refused";
 	while (n > 0 && s < refusal_texts + sizeof refusal_texts - 1)
 		if (*s++ == '\0')

@@ -629,6 +629,8 @@ int16_t vehicle_state_of(const vehicle_t *v, const char **word, const vs_alarm_t
 {
 	static const char *const words[] = {"Ready",  "Busy",  "Warning", "Alarm",   "Stuck",
 					    "Paused", "Avoid", "Locked",  "Powered", "Unpowered"};
+	_Static_assert(sizeof words / sizeof words[0] == VS_STATE_UNPOWERED - VS_STATE_READY + 1,
+		       "a word for each state");
 	int16_t code = state_code(v, why);
 	*word = words[code - VS_STATE_READY];
 	return code;

@@ -11,9 +11,10 @@
 
 _Static_assert(BBOX_RESP_MAX <= WIRE_RESP_MAX, "a page fits an answer");
 
-#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
-/* A sample's memory is its layout on the wire, little-endian without gaps:
- * one copy (0.2 KiB less flash on a board than field by field). */
+/* A sample's memory is its layout on the wire, little-endian without gaps,
+ * on every unit this firmware runs on (x86-64, arm64, Cortex-M): one copy
+ * (0.2 KiB less flash on a board than field by field). */
+_Static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "a little-endian unit");
 #define BBOX_AT(m, at) _Static_assert(offsetof(bbox_sample_t, m) == (at), #m " at its wire offset");
 BBOX_AT(ref, 0)
 BBOX_AT(odo, 24)
@@ -33,31 +34,6 @@ static void put_sample(uint8_t *p, const bbox_sample_t *s)
 {
 	memcpy(p, s, BBOX_SAMPLE_LEN);
 }
-#else
-static void put_i64(uint8_t *p, int64_t v)
-{
-	wire_put_u32(p, (uint32_t)((uint64_t)v & 0xFFFFFFFFu));
-	wire_put_u32(p + 4, (uint32_t)((uint64_t)v >> 32));
-}
-
-static void put_sample(uint8_t *p, const bbox_sample_t *s)
-{
-	const q32_t q[9] = {s->ref.x_mm,   s->ref.y_mm,	 s->ref.th_deg, s->odo.x_mm, s->odo.y_mm,
-			    s->odo.th_deg, s->cmd.vx_pt, s->cmd.vy_pt,	s->cmd.w_pt};
-
-	for (size_t i = 0; i < 9; i++)
-		put_i64(p + 8 * i, q[i]);
-	for (size_t i = 0; i < VS_MAX_AXES; i++) {
-		wire_put_u32(p + 72 + 4 * i, (uint32_t)s->sp_q8[i]);
-		wire_put_u32(p + 88 + 4 * i, (uint32_t)s->enc[i]);
-	}
-	wire_put_u32(p + 104, s->tick);
-	wire_put_u32(p + 108, s->newest_alarm);
-	wire_put_u16(p + 112, (uint16_t)s->state);
-	p[114] = s->queue_len;
-	p[115] = s->alarms;
-}
-#endif
 
 /* The samples this unit puts in an answer (a client takes up to BBOX_PAGE,
  * reading on from the count it got): a board answers fewer, as a page of
