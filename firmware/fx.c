@@ -201,12 +201,25 @@ q32_t fx_wrap_deg_any(q32_t deg)
 }
 
 /* atan(2^-i) in Q32 degrees. */
-static const int64_t cordic_atan_deg[32] = {
-    193273528320, 114096026022, 60285206653, 30601712202, 15360239180, 7687607525, 3844741810,
-    1922488225,	  961258780,	480631223,   240315841,	  120157949,   60078978,   30039490,
-    15019745,	  7509872,	3754936,     1877468,	  938734,      469367,	   234684,
-    117342,	  58671,	29335,	     14668,	  7334,	       3667,	   1833,
-    917,	  458,		229,	     115};
+#define CORDIC_ATAN_DEG(X)                                                                         \
+	X(193273528320), X(114096026022), X(60285206653), X(30601712202), X(15360239180),          \
+	    X(7687607525), X(3844741810), X(1922488225), X(961258780), X(480631223), X(240315841), \
+	    X(120157949), X(60078978), X(30039490), X(15019745), X(7509872), X(3754936),           \
+	    X(1877468), X(938734), X(469367), X(234684), X(117342), X(58671), X(29335), X(14668),  \
+	    X(7334), X(3667), X(1833), X(917), X(458), X(229), X(115)
+#ifdef __OPTIMIZE_SIZE__
+/* Where code size counts, the low 32 bits and the byte above them: 96
+ * bytes of flash less than 64-bit entries. */
+#define ATAN_LO(v) (uint32_t)(v)
+#define ATAN_HI(v) (uint8_t)((int64_t)(v) >> 32)
+static const uint32_t cordic_atan_lo[32] = {CORDIC_ATAN_DEG(ATAN_LO)};
+static const uint8_t cordic_atan_hi[32] = {CORDIC_ATAN_DEG(ATAN_HI)};
+#define CORDIC_ATAN(i) ((int64_t)((uint64_t)cordic_atan_hi[i] << 32 | cordic_atan_lo[i]))
+#else
+#define ATAN_ALL(v)    (v)
+static const int64_t cordic_atan_deg[32] = {CORDIC_ATAN_DEG(ATAN_ALL)};
+#define CORDIC_ATAN(i) cordic_atan_deg[i]
+#endif
 
 q32_t fx_atan2_deg(int64_t y, int64_t x)
 {
@@ -237,11 +250,11 @@ q32_t fx_atan2_deg(int64_t y, int64_t x)
 		if (y > 0) {
 			x += ys;
 			y -= xs;
-			angle += cordic_atan_deg[i];
+			angle += CORDIC_ATAN(i);
 		} else {
 			x -= ys;
 			y += xs;
-			angle -= cordic_atan_deg[i];
+			angle -= CORDIC_ATAN(i);
 		}
 	}
 	return fx_wrap_deg(angle);
