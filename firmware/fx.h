@@ -124,6 +124,15 @@ static inline int64_t fx_mul_q30(int64_t a, int32_t b_q30)
 #endif
 }
 
+/* (x, y) turned by the angle whose Q30 cosine and sine are c and s:
+ * (x c - y s, x s + y c). Every rotation of the engine in one copy where
+ * code size counts. */
+FX_HELPER void fx_rot_q30(int64_t x, int64_t y, int32_t c, int32_t s, int64_t *rx, int64_t *ry)
+{
+	*rx = fx_mul_q30(x, c) - fx_mul_q30(y, s);
+	*ry = fx_mul_q30(x, s) + fx_mul_q30(y, c);
+}
+
 /* floor(a * b / 2^32 + 1/2), saturating: the portable form, and the one a
  * build without 128-bit integers (a Cortex-M) uses out of line. */
 q32_t fx_mul_portable(q32_t a, q32_t b);

@@ -91,8 +91,9 @@ typedef struct {
 static void map_point(const frame_map_t *f, q32_t *x, q32_t *y)
 {
 	q32_t rx = *x - f->ox, ry = *y - f->oy;
-	*x = f->nx + fx_mul_q30(rx, f->c) - fx_mul_q30(ry, f->s);
-	*y = f->ny + fx_mul_q30(rx, f->s) + fx_mul_q30(ry, f->c);
+	fx_rot_q30(rx, ry, f->c, f->s, &rx, &ry);
+	*x = f->nx + rx;
+	*y = f->ny + ry;
 }
 
 static void map_pose(const frame_map_t *f, fx_pose_t *p)
@@ -103,9 +104,10 @@ static void map_pose(const frame_map_t *f, fx_pose_t *p)
 
 static void map_dir(const frame_map_t *f, int32_t *ux, int32_t *uy)
 {
-	int64_t x = *ux, y = *uy;
-	*ux = (int32_t)(fx_mul_q30(x, f->c) - fx_mul_q30(y, f->s));
-	*uy = (int32_t)(fx_mul_q30(x, f->s) + fx_mul_q30(y, f->c));
+	int64_t x, y;
+	fx_rot_q30(*ux, *uy, f->c, f->s, &x, &y);
+	*ux = (int32_t)x;
+	*uy = (int32_t)y;
 }
 
 void motion_set_pose(motion_t *m, const fx_pose_t *p)

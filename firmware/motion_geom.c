@@ -6,8 +6,7 @@ void motion_body_to_world(q32_t th, q32_t bx, q32_t by, q32_t *wx, q32_t *wy)
 	uint32_t b = fx_deg_to_bam(th);
 	int32_t c, s;
 	fx_sincos_bam(b, &s, &c);
-	*wx = fx_mul_q30(bx, c) - fx_mul_q30(by, s);
-	*wy = fx_mul_q30(bx, s) + fx_mul_q30(by, c);
+	fx_rot_q30(bx, by, c, s, wx, wy);
 }
 
 fx_pose_t motion_rel_to_abs(const fx_pose_t *from, const fx_pose_t *rel)

@@ -95,8 +95,9 @@ bool motion_circular_rel(motion_t *m, q32_t cx_mm, q32_t cy_mm, q32_t angle_deg)
 	int32_t co, si;
 	fx_sincos_bam(b, &si, &co);
 	q32_t rx = -dx, ry = -dy;
-	c.target.x_mm = c.cx_mm + fx_mul_q30(rx, co) - fx_mul_q30(ry, si);
-	c.target.y_mm = c.cy_mm + fx_mul_q30(rx, si) + fx_mul_q30(ry, co);
+	fx_rot_q30(rx, ry, co, si, &rx, &ry);
+	c.target.x_mm = c.cx_mm + rx;
+	c.target.y_mm = c.cy_mm + ry;
 	c.target.th_deg = fx_wrap_deg(m->ref.th_deg + angle_deg);
 	return push(m, &c);
 }

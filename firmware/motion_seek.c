@@ -42,15 +42,14 @@
  * body frame): a body vector (x, y) onto them, and back. */
 static inline void to_axes(q32_t x, q32_t y, int32_t c, int32_t s, q32_t *u, q32_t *n)
 {
-	*u = fx_mul_q30(x, c) + fx_mul_q30(y, s);
-	*n = fx_mul_q30(y, c) - fx_mul_q30(x, s);
+	/* (x, y) turned back by the bearing: the swapped pair turned forward. */
+	fx_rot_q30(y, x, c, s, n, u);
 }
 
 static inline void from_axes(const motion_t *m, fx_twist_t *vel)
 {
 	int32_t c = m->sk_c, s = m->sk_s;
-	vel->vx_pt = fx_mul_q30(m->sk_v[0], c) - fx_mul_q30(m->sk_v[1], s);
-	vel->vy_pt = fx_mul_q30(m->sk_v[0], s) + fx_mul_q30(m->sk_v[1], c);
+	fx_rot_q30(m->sk_v[0], m->sk_v[1], c, s, &vel->vx_pt, &vel->vy_pt);
 }
 
 /* A jerk of 0 (unlimited on that axis): one that lets the acceleration

@@ -184,8 +184,9 @@ static void piece_advance(motion_t *m, q32_t s)
 		int32_t co, si;
 		fx_sincos_bam(b, &si, &co);
 		q32_t rx = g->p0.x_mm - g->cx, ry = g->p0.y_mm - g->cy;
-		out->x_mm = g->cx + fx_mul_q30(rx, co) - fx_mul_q30(ry, si);
-		out->y_mm = g->cy + fx_mul_q30(rx, si) + fx_mul_q30(ry, co);
+		fx_rot_q30(rx, ry, co, si, &rx, &ry);
+		out->x_mm = g->cx + rx;
+		out->y_mm = g->cy + ry;
 		out->th_deg = fx_wrap_deg(g->p0.th_deg + g->dir * s);
 		break;
 	}
