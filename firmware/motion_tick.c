@@ -241,8 +241,10 @@ static void twist_between(const motion_t *m, const fx_pose_t *a, const fx_pose_t
 	uint32_t mid = fx_deg_to_bam(a->th_deg + dth / 2);
 	int32_t c, s;
 	fx_sincos_bam(mid, &s, &c);
-	t->vx_pt = fx_mul_q30(dx, c) + fx_mul_q30(dy, s);
-	t->vy_pt = KIN_OMNI(m->p.kin) ? fx_mul_q30(dy, c) - fx_mul_q30(dx, s) : 0;
+	/* (dx, dy) turned back by the heading: the swapped pair turned forward. */
+	fx_rot_q30(dy, dx, c, s, &t->vy_pt, &t->vx_pt);
+	if (!KIN_OMNI(m->p.kin))
+		t->vy_pt = 0;
 	t->w_pt = dth;
 }
 
