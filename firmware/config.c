@@ -38,10 +38,13 @@ _Static_assert(sizeof(vs_config_t) <= UINT16_MAX, "offsets fit the rows");
 /* The firmware's columns for readers: names, where and what. */
 #define ROW(m, cnt, t, d, lo, hi, ex, w, ...)                                                      \
 	{.name = #m,                                                                               \
+	 .hi8 = (int32_t)((hi)*8),                                                                 \
 	 .off = (uint16_t)offsetof(vs_config_t, m),                                                \
+	 .lo8 = (int16_t)((lo)*8),                                                                 \
 	 .type = VS_CFG_##t,                                                                       \
 	 .n = (cnt),                                                                               \
-	 .when = VS_CFG_WHEN_##w},
+	 .when = VS_CFG_WHEN_##w,                                                                  \
+	 .lo_excl = (ex)},
 const vs_config_field_t vs_config_fields[VS_CONFIG_NFIELDS] = {VS_CONFIG_FIELDS(ROW)};
 #undef ROW
 
@@ -154,24 +157,6 @@ static inline bool within(vs_real_t x, vs_real_t lo, vs_real_t hi, bool lo_excl)
 	return (lo_excl ? x > lo : x >= lo) && x <= hi;
 }
 
-/* Each row's bounds in eighths of its unit (every bound of the table is a
- * multiple of 1/8 below 2^28): one table of 8 bytes a row and one loop,
- * where a comparison with two 64-bit constants per element took 1.8 KiB of
- * a board's flash (run at init on a compiled-in configuration, a compiler
- * folded it away; changed at run time, $config judges any). */
-static const struct {
-	int32_t lo8, hi8;
-} ranges[VS_CONFIG_NFIELDS] = {
-#define RANGE(m, n, t, d, lo, hi, ...) {(int32_t)((lo)*8), (int32_t)((hi)*8)},
-    VS_CONFIG_FIELDS(RANGE)
-#undef RANGE
-};
-/* The rows whose lower bound is excluded, a bit each. */
-_Static_assert(VS_CONFIG_NFIELDS <= 64, "a bit a row");
-#define EXCL(m, n, t, d, lo, hi, ex, ...) | ((uint64_t)(ex) << VS_CONFIG_ROW_##m)
-static const uint64_t lo_excl = 0 VS_CONFIG_FIELDS(EXCL);
-#undef EXCL
-
 /* A bound in row type's terms: a real row's as vs_real_t, an integer's as
  * the integer. */
 static vs_real_t bound(int32_t b8, uint8_t type)
@@ -207,9 +192,9 @@ static unsigned first_out_of_range(const vs_config_t *c)
 {
 	for (unsigned i = 0; i < VS_CONFIG_NFIELDS; i++) {
 		const vs_config_field_t *f = &vs_config_fields[i];
-		vs_real_t lo = bound(ranges[i].lo8, f->type), hi = bound(ranges[i].hi8, f->type);
+		vs_real_t lo = bound(f->lo8, f->type), hi = bound(f->hi8, f->type);
 		for (unsigned k = 0; k < f->n; k++)
-			if (!within(element(c, f, k), lo, hi, (lo_excl >> i) & 1u))
+			if (!within(element(c, f, k), lo, hi, f->lo_excl))
 				return i;
 	}
 	return VS_CONFIG_NFIELDS;

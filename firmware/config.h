@@ -121,14 +121,20 @@ typedef enum {
 } vs_config_when_t;
 
 /* One row of the table as the firmware keeps it for readers of a running
- * configuration (the console's $config): no range, no XML columns.
- * vs_config_defaults and vs_config_check are generated from the rows. */
+ * configuration (the console's $config) and for vs_config_check: no XML
+ * columns. vs_config_defaults is generated from the rows. The range in
+ * eighths of the unit (every bound of the table is a multiple of 1/8 below
+ * 2^28) fills what was the row's padding: 16 bytes a row, where a separate
+ * table of ranges took 8 bytes a row more. */
 typedef struct {
 	const char *name; /* the member's name */
+	int32_t hi8;	  /* max * 8 */
 	uint16_t off;	  /* offsetof(vs_config_t, member) */
+	int16_t lo8;	  /* min * 8 */
 	uint8_t type;	  /* vs_config_type_t */
 	uint8_t n;	  /* elements: 1, or the array's length */
 	uint8_t when;	  /* vs_config_when_t */
+	bool lo_excl;	  /* min < x rather than min <= x */
 } vs_config_field_t;
 
 /* Row indexes, VS_CONFIG_ROW_<member>, in the table's order. */
