@@ -109,13 +109,8 @@ static motion_kin_t init_motion(vehicle_t *v, const vs_config_t *cfg)
 	    .cruise_blend_mm = to_q32(cfg->cruise_blend_mm),
 	};
 	motion_init(&v->motion, &mp);
-	motion_set_velocity(&v->motion, to_q32(cfg->vel_default_t_mm_s),
-			    to_q32(cfg->vel_default_r_deg_s));
-	motion_set_accel(&v->motion, to_q32(cfg->acc_default_t_mm_s2),
-			 to_q32(cfg->acc_default_r_deg_s2));
 	motion_set_jerk(&v->motion, to_q32(cfg->jerk_default_t_mm_s3),
 			to_q32(cfg->jerk_default_r_deg_s3));
-	motion_set_jog_timeout_ms(&v->motion, cfg->jog_timeout_default_ms);
 	return mp.kin;
 }
 
@@ -198,6 +193,19 @@ static void init_supervision(vehicle_t *v, const vs_config_t *cfg, vs_real_t cou
 	v->joystick_deadband_q15 = (int32_t)scaled(cfg->joystick_deadband, 32767u);
 }
 
+/* Everything derived from cfg, as init and a change at run time both do:
+ * the motion engine with the settings in force (v->vel_set, v->acc_set,
+ * v->jog_timeout_ms), the wheel loop and the supervision limits. */
+static void derive(vehicle_t *v, const vs_config_t *cfg)
+{
+	v->cfg = *cfg;
+	init_supervision(v, cfg, init_kin(v, cfg, init_motion(v, cfg)));
+	motion_set_velocity(&v->motion, to_q32(v->vel_set.translation),
+			    to_q32(v->vel_set.rotation));
+	motion_set_accel(&v->motion, to_q32(v->acc_set.translation), to_q32(v->acc_set.rotation));
+	motion_set_jog_timeout_ms(&v->motion, (uint16_t)v->jog_timeout_ms);
+}
+
 int vehicle_init(vehicle_t *v, const vs_config_t *cfg, const vs_hal_t *hal, const char **bad_field)
 {
 	int rc = vs_config_check(cfg, bad_field);
@@ -210,14 +218,12 @@ int vehicle_init(vehicle_t *v, const vs_config_t *cfg, const vs_hal_t *hal, cons
 	}
 
 	*v = (vehicle_t){0};
-	v->cfg = *cfg;
 	v->hal = *hal;
 	v->naxes = vs_config_axes(cfg);
-	vs_real_t counts_per_mm = init_kin(v, cfg, init_motion(v, cfg));
 	v->vel_set = (vs_velocity_t){cfg->vel_default_t_mm_s, cfg->vel_default_r_deg_s};
 	v->acc_set = (vs_velocity_t){cfg->acc_default_t_mm_s2, cfg->acc_default_r_deg_s2};
 	v->jog_timeout_ms = (int16_t)cfg->jog_timeout_default_ms;
-	init_supervision(v, cfg, counts_per_mm);
+	derive(v, cfg);
 
 	/* Start Unpowered in fact, not only in name. */
 	for (uint8_t i = 0; i < v->naxes; i++)
@@ -512,17 +518,12 @@ void vehicle_reconfigure(vehicle_t *v, const vs_config_t *cfg)
 
 	/* As vehicle_init derives them; the unit's state (power, alarms, the
 	 * pose, the encoders' last counts) stays. */
-	v->cfg = *cfg;
-	vs_real_t counts_per_mm = init_kin(v, cfg, init_motion(v, cfg));
-	kin_sync(&v->kin, v->meas_counts);
-	motion_set_pose(&v->motion, &v->odom);
-	init_supervision(v, cfg, counts_per_mm);
-	motion_set_velocity(&v->motion, to_q32(vel.translation), to_q32(vel.rotation));
-	motion_set_accel(&v->motion, to_q32(acc.translation), to_q32(acc.rotation));
-	motion_set_jog_timeout_ms(&v->motion, (uint16_t)jog);
 	v->vel_set = vel;
 	v->acc_set = acc;
 	v->jog_timeout_ms = jog;
+	derive(v, cfg);
+	kin_sync(&v->kin, v->meas_counts);
+	motion_set_pose(&v->motion, &v->odom);
 }
 
 void vehicle_config_live(vehicle_t *v, const vs_config_t *cfg)
