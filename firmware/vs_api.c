@@ -488,39 +488,47 @@ bool vehicle_config_idle(const vehicle_t *v)
 	return !v->servo && !motion_has_work(&v->motion);
 }
 
-/* A setting in force (t, r) that is still within its new limits, or the
- * new default (also when the default itself changed). */
-static vs_velocity_t kept_setting(vs_velocity_t set, vs_velocity_t old_def, vs_velocity_t def,
-				  vs_real_t lim_t, vs_real_t lim_r)
+/* The real member at offset off of c. */
+static vs_real_t real_of(const vs_config_t *c, size_t off)
 {
-	bool def_changed =
-	    old_def.translation != def.translation || old_def.rotation != def.rotation;
-	if (def_changed || check_setting(set.translation, lim_t) ||
-	    check_setting(set.rotation, lim_r))
-		return def;
-	return set;
+	return *(const vs_real_t *)(const void *)((const char *)c + off);
+}
+
+/* A pair's r member follows its t member (keep_setting). */
+#define PAIR(t, r) (offsetof(vs_config_t, r) == offsetof(vs_config_t, t) + sizeof(vs_real_t))
+_Static_assert(PAIR(vel_default_t_mm_s, vel_default_r_deg_s) &&
+		   PAIR(vel_limit_t_mm_s, vel_limit_r_deg_s) &&
+		   PAIR(acc_default_t_mm_s2, acc_default_r_deg_s2) &&
+		   PAIR(acc_limit_t_mm_s2, acc_limit_r_deg_s2),
+	       "the pairs a setting is kept by");
+#undef PAIR
+
+/* A setting in force *set (t, r) stays while it is within its new limits
+ * and its default did not change; else it becomes the new default. def,
+ * lim: the offsets of the default's and the limit's t members (one copy of
+ * the rule for the speed and the acceleration). */
+static void keep_setting(vs_velocity_t *set, const vs_config_t *old, const vs_config_t *cfg,
+			 size_t def, size_t lim)
+{
+	size_t r = sizeof(vs_real_t);
+	vs_real_t def_t = real_of(cfg, def), def_r = real_of(cfg, def + r);
+	if (real_of(old, def) != def_t || real_of(old, def + r) != def_r ||
+	    check_setting(set->translation, real_of(cfg, lim)) ||
+	    check_setting(set->rotation, real_of(cfg, lim + r)))
+		*set = (vs_velocity_t){def_t, def_r};
 }
 
 void vehicle_reconfigure(vehicle_t *v, const vs_config_t *cfg)
 {
-	const vs_config_t *o = &v->cfg;
-	vs_velocity_t vel =
-	    kept_setting(v->vel_set, (vs_velocity_t){o->vel_default_t_mm_s, o->vel_default_r_deg_s},
-			 (vs_velocity_t){cfg->vel_default_t_mm_s, cfg->vel_default_r_deg_s},
-			 cfg->vel_limit_t_mm_s, cfg->vel_limit_r_deg_s);
-	vs_velocity_t acc = kept_setting(
-	    v->acc_set, (vs_velocity_t){o->acc_default_t_mm_s2, o->acc_default_r_deg_s2},
-	    (vs_velocity_t){cfg->acc_default_t_mm_s2, cfg->acc_default_r_deg_s2},
-	    cfg->acc_limit_t_mm_s2, cfg->acc_limit_r_deg_s2);
-	int16_t jog = cfg->jog_timeout_default_ms != o->jog_timeout_default_ms
-			  ? (int16_t)cfg->jog_timeout_default_ms
-			  : v->jog_timeout_ms;
+	keep_setting(&v->vel_set, &v->cfg, cfg, offsetof(vs_config_t, vel_default_t_mm_s),
+		     offsetof(vs_config_t, vel_limit_t_mm_s));
+	keep_setting(&v->acc_set, &v->cfg, cfg, offsetof(vs_config_t, acc_default_t_mm_s2),
+		     offsetof(vs_config_t, acc_limit_t_mm_s2));
+	if (cfg->jog_timeout_default_ms != v->cfg.jog_timeout_default_ms)
+		v->jog_timeout_ms = (int16_t)cfg->jog_timeout_default_ms;
 
 	/* As vehicle_init derives them; the unit's state (power, alarms, the
 	 * pose, the encoders' last counts) stays. */
-	v->vel_set = vel;
-	v->acc_set = acc;
-	v->jog_timeout_ms = jog;
 	derive(v, cfg);
 	kin_sync(&v->kin, v->meas_counts);
 	motion_set_pose(&v->motion, &v->odom);

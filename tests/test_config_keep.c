@@ -218,6 +218,17 @@ static void test_settings_in_force(void **state)
 	EXPECT("$config vel_default_t_mm_s 300", "ok vel_default_t_mm_s 300.000");
 	EXPECT("getDefaultVelocity", "ok true 300.000 90.000");
 	assert_true(veh.vel_set.translation == 300.0);
+	/* the acceleration by the same rule; a jog timeout in force stays
+	 * until its default changes */
+	EXPECT("setAcceleration 800 300", "ok true");
+	EXPECT("setJogTimeout 300", "ok true");
+	EXPECT("$config acc_limit_t_mm_s2 900", "ok acc_limit_t_mm_s2 900.000");
+	assert_true(veh.acc_set.translation == 800.0 && veh.acc_set.rotation == 300.0);
+	assert_int_equal(veh.jog_timeout_ms, 300);
+	EXPECT("$config acc_limit_r_deg_s2 200", "ok acc_limit_r_deg_s2 200.000");
+	assert_true(veh.acc_set.translation == 500.0 && veh.acc_set.rotation == 180.0);
+	EXPECT("$config jog_timeout_default_ms 400", "ok jog_timeout_default_ms 400");
+	assert_int_equal(veh.jog_timeout_ms, 400);
 	/* the unit moves by the new configuration */
 	EXPECT("setPower on", "ok true");
 	EXPECT("setServo on", "ok true");
