@@ -4,12 +4,19 @@
 
 #include <stddef.h>
 
-#define OFF_MAGIC  0u
-#define OFF_SEQ	   4u
-#define OFF_SCHEMA 8u
-#define OFF_LEN	   12u
-#define OFF_CRC	   16u
-#define OFF_COMMIT 24u
+/* The header's words by index (cfgstore.h gives their byte offsets). The
+ * store's format is little-endian, as the unit is: the header is read and
+ * built as words, where a byte-wise get and put per field took 0.1 KiB
+ * more flash. */
+_Static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "the record's words in the unit's order");
+#define W_MAGIC	   0u
+#define W_SEQ	   1u
+#define W_SCHEMA   2u
+#define W_LEN	   3u
+#define W_CRC	   4u
+#define W_COMMIT   6u
+#define OFF_CRC	   (4u * W_CRC)
+#define OFF_COMMIT (4u * W_COMMIT)
 #define CHUNK	   64u
 
 typedef enum { SLOT_ERASED, SLOT_VALID, SLOT_GARBAGE, SLOT_IO } slot_state_t;
@@ -29,19 +36,6 @@ uint32_t cfgstore_crc32(uint32_t crc, const void *data, uint32_t n)
 			crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
 	}
 	return ~crc;
-}
-
-static uint32_t get32(const uint8_t *p)
-{
-	return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
-}
-
-static void put32(uint8_t *p, uint32_t x)
-{
-	p[0] = (uint8_t)x;
-	p[1] = (uint8_t)(x >> 8);
-	p[2] = (uint8_t)(x >> 16);
-	p[3] = (uint8_t)(x >> 24);
 }
 
 static uint32_t slot_bytes(const hal_store_t *s)
@@ -86,14 +80,14 @@ static slot_state_t erased_from(const hal_store_t *s, uint8_t slot, uint32_t off
 static slot_t slot_read(const hal_store_t *s, uint8_t slot, uint8_t *buf)
 {
 	slot_t r = {SLOT_GARBAGE, 0, 0, 0};
-	uint8_t h[CFGSTORE_HEADER];
+	uint32_t h[CFGSTORE_HEADER / 4u];
 	uint32_t base = slot_base(s, slot);
 	if (!s->read(s->ctx, base, h, sizeof h)) {
 		r.st = SLOT_IO;
 		return r;
 	}
-	r.len = get32(h + OFF_LEN);
-	if (get32(h + OFF_COMMIT) != CFGSTORE_COMMIT || get32(h + OFF_MAGIC) != CFGSTORE_MAGIC ||
+	r.len = h[W_LEN];
+	if (h[W_COMMIT] != CFGSTORE_COMMIT || h[W_MAGIC] != CFGSTORE_MAGIC ||
 	    r.len > cfgstore_capacity(s)) {
 		r.st = erased_from(s, slot, 0);
 		return r;
@@ -110,11 +104,11 @@ static slot_t slot_read(const hal_store_t *s, uint8_t slot, uint8_t *buf)
 		crc = cfgstore_crc32(crc, p, n);
 		off += n;
 	}
-	if (crc != get32(h + OFF_CRC))
+	if (crc != h[W_CRC])
 		return r;
 	r.st = SLOT_VALID;
-	r.seq = get32(h + OFF_SEQ);
-	r.schema = get32(h + OFF_SCHEMA);
+	r.seq = h[W_SEQ];
+	r.schema = h[W_SCHEMA];
 	return r;
 }
 
@@ -206,17 +200,17 @@ cfgstore_status_t cfgstore_save(const hal_store_t *s, const void *payload, uint3
 			return CFGSTORE_IO;
 	}
 	/* The header up to the commit word, then the commit word alone. */
-	uint8_t h[CFGSTORE_HEADER];
-	for (uint32_t i = 0; i < sizeof h; i++)
-		h[i] = s->erased_byte;
-	put32(h + OFF_MAGIC, CFGSTORE_MAGIC);
-	put32(h + OFF_SEQ, seq);
-	put32(h + OFF_SCHEMA, schema);
-	put32(h + OFF_LEN, len);
-	put32(h + OFF_CRC, cfgstore_crc32(cfgstore_crc32(0, h, OFF_CRC), payload, len));
-	put32(h + OFF_COMMIT, CFGSTORE_COMMIT);
+	uint32_t h[CFGSTORE_HEADER / 4u];
+	for (uint32_t i = 0; i < CFGSTORE_HEADER / 4u; i++)
+		h[i] = s->erased_byte * 0x01010101u; /* the reserved words erased */
+	h[W_MAGIC] = CFGSTORE_MAGIC;
+	h[W_SEQ] = seq;
+	h[W_SCHEMA] = schema;
+	h[W_LEN] = len;
+	h[W_CRC] = cfgstore_crc32(cfgstore_crc32(0, h, OFF_CRC), payload, len);
+	h[W_COMMIT] = CFGSTORE_COMMIT;
 	if (!s->program(s->ctx, base, h, OFF_COMMIT) ||
-	    !s->program(s->ctx, base + OFF_COMMIT, h + OFF_COMMIT, w))
+	    !s->program(s->ctx, base + OFF_COMMIT, &h[W_COMMIT], w))
 		return CFGSTORE_IO;
 	slot_t r = slot_read(s, slot, NULL);
 	if (r.st == SLOT_IO)
