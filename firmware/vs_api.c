@@ -93,8 +93,23 @@ FX_HELPER uint32_t ms_to_ticks(uint32_t ms, uint32_t tick_hz)
 	return t ? t : 1u;
 }
 
-/* The motion engine at the configured limits and defaults; returns its
- * kinematics. */
+/* What the ANY fields give the unit, from its configuration (init, a
+ * change at run time, $jerk: one copy each): the jerk in force and the
+ * battery thresholds in millivolts. */
+static void jerk_in_force(vehicle_t *v)
+{
+	motion_set_jerk(&v->motion, to_q32(v->cfg.jerk_default_t_mm_s3),
+			to_q32(v->cfg.jerk_default_r_deg_s3));
+}
+
+static void battery_limits(vehicle_t *v)
+{
+	v->battery_low_mv = (uint32_t)scaled(v->cfg.battery_low_v, 1000u);
+	v->battery_critical_mv = (uint32_t)scaled(v->cfg.battery_critical_v, 1000u);
+}
+
+/* The motion engine at the configured limits and defaults (cfg: the
+ * unit's); returns its kinematics. */
 static motion_kin_t init_motion(vehicle_t *v, const vs_config_t *cfg)
 {
 	motion_params_t mp = {
@@ -109,8 +124,7 @@ static motion_kin_t init_motion(vehicle_t *v, const vs_config_t *cfg)
 	    .cruise_blend_mm = to_q32(cfg->cruise_blend_mm),
 	};
 	motion_init(&v->motion, &mp);
-	motion_set_jerk(&v->motion, to_q32(cfg->jerk_default_t_mm_s3),
-			to_q32(cfg->jerk_default_r_deg_s3));
+	jerk_in_force(v);
 	return mp.kin;
 }
 
@@ -186,8 +200,7 @@ static void init_supervision(vehicle_t *v, const vs_config_t *cfg, vs_real_t cou
 	v->window_ticks = ms_to_ticks(cfg->position_window_ms, cfg->tick_hz);
 	v->settle_timeout_ticks = ms_to_ticks(cfg->settle_timeout_ms, cfg->tick_hz);
 	v->inpos_ticks = v->window_ticks; /* servo off: nothing to settle */
-	v->battery_low_mv = (uint32_t)scaled(cfg->battery_low_v, 1000u);
-	v->battery_critical_mv = (uint32_t)scaled(cfg->battery_critical_v, 1000u);
+	battery_limits(v);
 	v->battery_low_armed = true;
 	v->caution_vel_t = to_q32(cfg->caution_vel_t_mm_s);
 	v->joystick_deadband_q15 = (int32_t)scaled(cfg->joystick_deadband, 32767u);
@@ -299,12 +312,33 @@ FX_HELPER uint32_t check_setting(vs_real_t x, vs_real_t limit)
 	return 0;
 }
 
+/* The real member at offset off of c. */
+static vs_real_t real_of(const vs_config_t *c, size_t off)
+{
+	return *(const vs_real_t *)(const void *)((const char *)c + off);
+}
+
+/* A pair's r member follows its t member (check_pair, keep_setting). */
+#define PAIR(t, r) (offsetof(vs_config_t, r) == offsetof(vs_config_t, t) + sizeof(vs_real_t))
+_Static_assert(PAIR(vel_default_t_mm_s, vel_default_r_deg_s) &&
+		   PAIR(vel_limit_t_mm_s, vel_limit_r_deg_s) &&
+		   PAIR(acc_default_t_mm_s2, acc_default_r_deg_s2) &&
+		   PAIR(acc_limit_t_mm_s2, acc_limit_r_deg_s2),
+	       "the pairs a setting is judged by");
+#undef PAIR
+
+/* A setting (t, r) against the limit pair at offset lim of c: 0, or the
+ * refusal's code (110 when either is not a number, else 111). */
+static uint32_t check_pair(const vs_velocity_t *set, const vs_config_t *c, size_t lim)
+{
+	uint32_t e = check_setting(set->translation, real_of(c, lim));
+	uint32_t er = check_setting(set->rotation, real_of(c, lim + sizeof(vs_real_t)));
+	return e == 0 || er == ALM_W_BAD_ARGUMENT ? er : e;
+}
+
 bool vs_setVelocity(vehicle_t *v, vs_velocity_t vel)
 {
-	uint32_t e = check_setting(vel.translation, v->cfg.vel_limit_t_mm_s);
-	uint32_t er = check_setting(vel.rotation, v->cfg.vel_limit_r_deg_s);
-	if (e == 0 || er == ALM_W_BAD_ARGUMENT)
-		e = er;
+	uint32_t e = check_pair(&vel, &v->cfg, offsetof(vs_config_t, vel_limit_t_mm_s));
 	if (e != 0)
 		return vehicle_refuse(v, "setVelocity", e);
 	motion_set_velocity(&v->motion, to_q32(vel.translation), to_q32(vel.rotation));
@@ -314,10 +348,7 @@ bool vs_setVelocity(vehicle_t *v, vs_velocity_t vel)
 
 bool vs_setAcceleration(vehicle_t *v, vs_velocity_t accel)
 {
-	uint32_t e = check_setting(accel.translation, v->cfg.acc_limit_t_mm_s2);
-	uint32_t er = check_setting(accel.rotation, v->cfg.acc_limit_r_deg_s2);
-	if (e == 0 || er == ALM_W_BAD_ARGUMENT)
-		e = er;
+	uint32_t e = check_pair(&accel, &v->cfg, offsetof(vs_config_t, acc_limit_t_mm_s2));
 	if (e != 0)
 		return vehicle_refuse(v, "setAcceleration", e);
 	/* Moving = Busy (or Avoid), waiting for the drives to enable included;
@@ -477,7 +508,7 @@ bool vehicle_set_jerk(vehicle_t *v, vs_real_t jt, vs_real_t jr)
 	/* The running configuration holds it, as $config shows. */
 	v->cfg.jerk_default_t_mm_s3 = jt;
 	v->cfg.jerk_default_r_deg_s3 = jr;
-	motion_set_jerk(&v->motion, to_q32(jt), to_q32(jr));
+	jerk_in_force(v);
 	return true;
 }
 
@@ -487,21 +518,6 @@ bool vehicle_config_idle(const vehicle_t *v)
 {
 	return !v->servo && !motion_has_work(&v->motion);
 }
-
-/* The real member at offset off of c. */
-static vs_real_t real_of(const vs_config_t *c, size_t off)
-{
-	return *(const vs_real_t *)(const void *)((const char *)c + off);
-}
-
-/* A pair's r member follows its t member (keep_setting). */
-#define PAIR(t, r) (offsetof(vs_config_t, r) == offsetof(vs_config_t, t) + sizeof(vs_real_t))
-_Static_assert(PAIR(vel_default_t_mm_s, vel_default_r_deg_s) &&
-		   PAIR(vel_limit_t_mm_s, vel_limit_r_deg_s) &&
-		   PAIR(acc_default_t_mm_s2, acc_default_r_deg_s2) &&
-		   PAIR(acc_limit_t_mm_s2, acc_limit_r_deg_s2),
-	       "the pairs a setting is kept by");
-#undef PAIR
 
 /* A setting in force *set (t, r) stays while it is within its new limits
  * and its default did not change; else it becomes the new default. def,
@@ -513,8 +529,7 @@ static void keep_setting(vs_velocity_t *set, const vs_config_t *old, const vs_co
 	size_t r = sizeof(vs_real_t);
 	vs_real_t def_t = real_of(cfg, def), def_r = real_of(cfg, def + r);
 	if (real_of(old, def) != def_t || real_of(old, def + r) != def_r ||
-	    check_setting(set->translation, real_of(cfg, lim)) ||
-	    check_setting(set->rotation, real_of(cfg, lim + r)))
+	    check_pair(set, cfg, lim) != 0)
 		*set = (vs_velocity_t){def_t, def_r};
 }
 
@@ -540,8 +555,6 @@ void vehicle_config_live(vehicle_t *v, const vs_config_t *cfg)
 	v->cfg = *cfg;
 	if (cfg->link_timeout_ms != link)
 		vehicle_set_link_timeout(v, cfg->link_timeout_ms);
-	motion_set_jerk(&v->motion, to_q32(cfg->jerk_default_t_mm_s3),
-			to_q32(cfg->jerk_default_r_deg_s3));
-	v->battery_low_mv = (uint32_t)scaled(cfg->battery_low_v, 1000u);
-	v->battery_critical_mv = (uint32_t)scaled(cfg->battery_critical_v, 1000u);
+	jerk_in_force(v);
+	battery_limits(v);
 }
