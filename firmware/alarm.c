@@ -17,14 +17,6 @@ vs_alarm_type_t alarm_type_of(uint32_t code)
 	return VS_ALARM_UNKNOWN;
 }
 
-static void copy_alarm(vs_alarm_t *dst, const vs_alarm_t *src)
-{
-	dst->code = src->code;
-	dst->type = src->type;
-	for (unsigned i = 0; i < VS_ALARM_SOURCE_MAX; i++)
-		dst->source[i] = src->source[i];
-}
-
 void alarm_raise(alarm_list_t *l, uint32_t code, const char *source)
 {
 	/* Slot to vacate: the code's own entry if active, else the oldest
@@ -42,8 +34,10 @@ void alarm_raise(alarm_list_t *l, uint32_t code, const char *source)
 		else
 			last = VS_ALARM_LIST_MAX - 1;
 	}
+	/* Whole entries: a copy field by field and byte by byte took more
+	 * flash than the call of the copy. */
 	for (unsigned i = last; i > 0; i--)
-		copy_alarm(&l->a[i], &l->a[i - 1]);
+		l->a[i] = l->a[i - 1];
 
 	vs_alarm_t *a = &l->a[0];
 	a->code = code;
