@@ -28,6 +28,30 @@ enum {
 #define CMD_HELP(h) , h
 #endif
 
+#ifdef VS_CMD_PACKED
+/* The field names and the IDL list in one text: "in names out names\0idl"
+ * (cmd_field_name skips the blank between them). */
+#define CMD_IDL_FLAT ""
+
+const cmd_def_t cmd_table[CMD_COUNT] = {
+#define VS_CMD(name, op, it, in, ot, on, idl, help)                                                \
+	{#name, in " " on "\0" idl, it, ot, (uint8_t)(sizeof(it) - 1), (uint8_t)(sizeof(ot) - 1)},
+#include "commands.def"
+#undef VS_CMD
+};
+
+const char *cmd_idl(const cmd_def_t *d)
+{
+	const char *idl = d->names + strlen(d->names) + 1;
+
+	return *idl ? idl : NULL;
+}
+
+size_t cmd_arg_name(const cmd_def_t *d, bool out, unsigned k, const char **start)
+{
+	return cmd_field_name(d->names, out ? d->n_in + k : k, start);
+}
+#else
 /* A row whose IDL list is its fields' (commands.def). */
 #define CMD_IDL_FLAT NULL
 
@@ -38,6 +62,12 @@ const cmd_def_t cmd_table[CMD_COUNT] = {
 #include "commands.def"
 #undef VS_CMD
 };
+
+size_t cmd_arg_name(const cmd_def_t *d, bool out, unsigned k, const char **start)
+{
+	return cmd_field_name(out ? d->out_names : d->in_names, k, start);
+}
+#endif
 
 /* The table's rows by name: a lookup is a binary search (comparing with
  * every row cost a microcontroller up to 1,700 instructions a request). */
@@ -157,7 +187,7 @@ static uint16_t table_crc_compute(void)
 	for (unsigned i = 0; i < CMD_COUNT; i++) {
 		const cmd_def_t *d = &cmd_table[i];
 		char num[4];
-		unsigned op = d->opcode, k = 0;
+		unsigned op = cmd_opcode(d), k = 0;
 
 		/* opcode in decimal, no leading zeros (at most 3 digits) */
 		if (op >= 100)

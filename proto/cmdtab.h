@@ -51,6 +51,18 @@ enum {
 #undef VS_CMD
 };
 
+#ifdef VS_CMD_PACKED
+/* A board's row, 16 bytes rather than 28 (its flash counts them): the types
+ * inline and not NUL-terminated, the in then the out field names in one
+ * text, the IDL list after that text's NUL ("" where CMD_IDL_FLAT), and the
+ * opcode the row's place. Read through the accessors below. */
+typedef struct {
+	const char *name;
+	const char *names;
+	char in_types[CMD_MAX_FIELDS], out_types[CMD_MAX_FIELDS];
+	uint8_t n_in, n_out;
+} cmd_def_t;
+#else
 typedef struct {
 	const char *name;
 	uint8_t opcode;
@@ -66,9 +78,20 @@ typedef struct {
 	const char *help;
 #endif
 } cmd_def_t;
+#endif
 
-/* The rows in opcode order: cmd_table[i].opcode == i + 1. */
+/* The rows in opcode order: row i has opcode i + 1. */
 extern const cmd_def_t cmd_table[CMD_COUNT];
+
+/* A row's opcode, and its IDL parameter list (NULL where it is the fields'
+ * own, CMD_IDL_FLAT), whichever the row's form. */
+#ifdef VS_CMD_PACKED
+#define cmd_opcode(d) ((unsigned)((d)-cmd_table) + 1u)
+const char *cmd_idl(const cmd_def_t *d);
+#else
+#define cmd_opcode(d) ((unsigned)(d)->opcode)
+#define cmd_idl(d)    ((d)->idl)
+#endif
 
 /* NULL when unknown. Names match case-insensitively. */
 const cmd_def_t *cmd_by_name(const char *name);
@@ -77,6 +100,8 @@ const cmd_def_t *cmd_by_opcode(unsigned opcode);
 /* Field i of a space-separated names list: returns its length and points
  * *start at it (length 0 when there is no such field). */
 size_t cmd_field_name(const char *names, unsigned i, const char **start);
+/* In (out false) or out (out true) field k of a row, as cmd_field_name. */
+size_t cmd_arg_name(const cmd_def_t *d, bool out, unsigned k, const char **start);
 /* IDL spelling of a type code ("boolean", "unsigned long", ...). */
 const char *cmd_type_idl(char type);
 

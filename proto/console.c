@@ -364,14 +364,14 @@ static void rb_idl_flat(rbuf_t *r, const cmd_def_t *d)
 	const char *sep = "";
 
 	for (int out = 0; out < 2; out++) {
-		const char *p = out ? d->out_names : d->in_names;
+		const char *t = out ? d->out_types : d->in_types;
 
-		for (const char *t = out ? d->out_types : d->in_types; *t; t++) {
-			size_t n = strcspn(p, " ");
+		for (unsigned k = 0; k < (out ? d->n_out : d->n_in); k++) {
+			const char *p;
+			size_t n = cmd_arg_name(d, out, k, &p);
 
-			rb_printf(r, "%s%s %s %.*s", sep, out ? "out" : "in", cmd_type_idl(*t),
+			rb_printf(r, "%s%s %s %.*s", sep, out ? "out" : "in", cmd_type_idl(t[k]),
 				  (int)n, p);
-			p += n + (p[n] == ' ');
 			sep = ", ";
 		}
 	}
@@ -398,9 +398,11 @@ static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_
 				return reply_error(c, r, "%d $help: no operation %s",
 						   CONSOLE_E_EXTRA, argv[1]);
 			/* The IDL's own signature, structs whole. */
-			rb_printf(r, "ok %u boolean %s(", d->opcode, d->name);
-			if (d->idl)
-				rb_puts(r, d->idl);
+			const char *idl = cmd_idl(d);
+
+			rb_printf(r, "ok %u boolean %s(", cmd_opcode(d), d->name);
+			if (idl)
+				rb_puts(r, idl);
 			else
 				rb_idl_flat(r, d);
 			rb_puts(r, ")");
@@ -572,7 +574,7 @@ static bool exec_line(console_t *c, const char *line, size_t len, rbuf_t *r)
 
 	for (unsigned k = 0; k < d->n_in; k++) {
 		const char *tok = argv[k + 1], *fn, *why = NULL;
-		int fl = (int)cmd_field_name(d->in_names, k, &fn), code = CONSOLE_E_NUMBER;
+		int fl = (int)cmd_arg_name(d, false, k, &fn), code = CONSOLE_E_NUMBER;
 		char t = d->in_types[k];
 		bool sh = t == CMD_T_SHORT;
 		int64_t iv = 0, lo = sh ? INT16_MIN : 0, hi = sh ? INT16_MAX : (int64_t)UINT32_MAX;

@@ -39,7 +39,7 @@ bool cmd_invoke(vehicle_t *v, const cmd_def_t *d, const cmd_value_t in[], cmd_va
 			out[i].alarms.a = scratch->alarms;
 	}
 
-	switch (d->opcode) {
+	switch (cmd_opcode(d)) {
 	case CMD_OP_clearAlarm:
 		return vs_clearAlarm(v);
 	case CMD_OP_getAccelerationLimit:
