@@ -19,18 +19,15 @@
  * commands get a few more. Further tokens are only counted. */
 #define CONSOLE_ARGV_MAX 16
 
-/* Bounded reply under construction; never writes past cap, always
- * NUL-terminated when cap > 0. */
-typedef struct {
-	char *buf;
-	size_t cap, len;
-} rbuf_t;
+/* The reply under construction (console.h). */
+typedef console_out_t rbuf_t;
 
-static void rb_init(rbuf_t *r, char *buf, size_t cap)
+static void rb_init(rbuf_t *r, char *buf, size_t cap, uint32_t *errors)
 {
 	r->buf = buf;
 	r->cap = cap;
 	r->len = 0;
+	r->errors = errors;
 	if (cap)
 		buf[0] = '\0';
 }
@@ -69,7 +66,7 @@ __attribute__((format(printf, 2, 0))) static void rb_vprintf(rbuf_t *r, const ch
 	r->buf[r->len] = '\0';
 }
 
-__attribute__((format(printf, 2, 3))) static void rb_printf(rbuf_t *r, const char *fmt, ...)
+void console_put(rbuf_t *r, const char *fmt, ...)
 {
 	va_list ap;
 
@@ -256,10 +253,10 @@ static void rb_value(rbuf_t *r, char type, const cmd_value_t *v)
 		rb_puts(r, v->b ? " true" : " false");
 		break;
 	case CMD_T_SHORT:
-		rb_printf(r, " %d", v->h);
+		console_put(r, " %d", v->h);
 		break;
 	case CMD_T_ULONG:
-		rb_printf(r, " %lu", (unsigned long)v->u);
+		console_put(r, " %lu", (unsigned long)v->u);
 		break;
 	case CMD_T_DOUBLE:
 		rb_puts(r, " ");
@@ -277,26 +274,27 @@ static void rb_value(rbuf_t *r, char type, const cmd_value_t *v)
 	}
 }
 
-/* Replaces whatever the reply holds with "error <text>". */
-__attribute__((format(printf, 3, 4))) static bool reply_error(console_t *c, rbuf_t *r,
-							      const char *fmt, ...)
+bool console_fail(rbuf_t *r, int code, const char *fmt, ...)
 {
 	va_list ap;
 
-	rb_init(r, r->buf, r->cap);
-	rb_puts(r, "error ");
+	r->len = 0;
+	if (r->cap)
+		r->buf[0] = '\0';
+	console_put(r, "error %d ", code);
 	va_start(ap, fmt);
 	rb_vprintf(r, fmt, ap);
 	va_end(ap);
-	c->errors++;
+	if (r->errors)
+		(*r->errors)++;
 	return true;
 }
 
 /* An extra's wrong argument count: "takes" the counts it takes, in words.
  * One format for them all (a board's flash counts its strings). */
-static bool reply_arity(console_t *c, rbuf_t *r, const char *cmd, const char *takes, unsigned ntok)
+static bool reply_arity(rbuf_t *r, const char *cmd, const char *takes, unsigned ntok)
 {
-	return reply_error(c, r, "%d %s takes %s, got %u", CONSOLE_E_ARITY, cmd, takes, ntok - 1);
+	return console_fail(r, CONSOLE_E_ARITY, "%s takes %s, got %u", cmd, takes, ntok - 1);
 }
 
 static const char *mode_name(uint8_t m)
@@ -336,15 +334,15 @@ static bool exec_jerk(console_t *c, char **argv, unsigned ntok, rbuf_t *r)
 {
 	vs_real_t jt, jr;
 	if (ntok != 1 && ntok != 3)
-		return reply_arity(c, r, "$jerk", "0 or 2 arguments", ntok);
+		return reply_arity(r, "$jerk", "0 or 2 arguments", ntok);
 	if (ntok == 3) {
 		if (np_parse_real(argv[1], &jt) != NP_OK || np_parse_real(argv[2], &jr) != NP_OK)
-			return reply_error(c, r, "%d $jerk: not a number", CONSOLE_E_NUMBER);
+			return console_fail(r, CONSOLE_E_NUMBER, "$jerk: not a number");
 		if (!vehicle_set_jerk(c->v, jt, jr))
-			return reply_error(c, r,
-					   "%d $jerk: %s %s exceeds the limits or is below what "
-					   "the tick rate holds",
-					   CONSOLE_E_EXTRA, argv[1], argv[2]);
+			return console_fail(r, CONSOLE_E_EXTRA,
+					    "$jerk: %s %s exceeds the limits or is below what "
+					    "the tick rate holds",
+					    argv[1], argv[2]);
 	}
 	vehicle_jerk(c->v, &jt, &jr);
 	const vs_config_t *cfg = &c->v->cfg;
@@ -370,8 +368,8 @@ static void rb_idl_flat(rbuf_t *r, const cmd_def_t *d)
 			const char *p;
 			size_t n = cmd_arg_name(d, out, k, &p);
 
-			rb_printf(r, "%s%s %s %.*s", sep, out ? "out" : "in", cmd_type_idl(t[k]),
-				  (int)n, p);
+			console_put(r, "%s%s %s %.*s", sep, out ? "out" : "in", cmd_type_idl(t[k]),
+				    (int)n, p);
 			sep = ", ";
 		}
 	}
@@ -395,12 +393,12 @@ static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_
 			const cmd_def_t *d = cmd_by_name(argv[1]);
 
 			if (!d)
-				return reply_error(c, r, "%d $help: no operation %s",
-						   CONSOLE_E_EXTRA, argv[1]);
+				return console_fail(r, CONSOLE_E_EXTRA, "$help: no operation %s",
+						    argv[1]);
 			/* The IDL's own signature, structs whole. */
 			const char *idl = cmd_idl(d);
 
-			rb_printf(r, "ok %u boolean %s(", cmd_opcode(d), d->name);
+			console_put(r, "ok %u boolean %s(", cmd_opcode(d), d->name);
 			if (idl)
 				rb_puts(r, idl);
 			else
@@ -408,24 +406,21 @@ static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_
 			rb_puts(r, ")");
 #ifndef VS_NO_HELP_TEXT
 			if (d->help[0])
-				rb_printf(r, ": %s", d->help);
+				console_put(r, ": %s", d->help);
 #endif
 			return true;
 		}
-		return reply_arity(c, r, "$help", "0 or 1 argument", ntok);
+		return reply_arity(r, "$help", "0 or 1 argument", ntok);
 	}
 	if (np_streq_nocase(cmd, "$config")) {
 #ifdef VS_NO_CONFIG_EXTRA
 		/* Its configuration is compiled in. */
 		(void)scratch;
-		return reply_error(c, r, "%d $config is not in this build", CONSOLE_E_EXTRA);
+		return console_fail(r, CONSOLE_E_EXTRA, "$config is not in this build");
 #else
 		/* $config save writes the saved form from the operations'
 		 * scratch, free on a console line. */
-		console_config(c, argv, ntok, r->buf, r->cap, scratch, sizeof *scratch);
-		r->len = strlen(r->buf);
-		if (r->buf[0] == 'e')
-			c->errors++;
+		console_config(c, argv, ntok, r, scratch, sizeof *scratch);
 		return true;
 #endif
 	}
@@ -434,13 +429,13 @@ static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_
 		 * off; hands-on bring-up, a lockstep harness). */
 		int64_t ms = 0;
 		if (ntok > 2)
-			return reply_arity(c, r, "$watchdog", "0 or 1 argument", ntok);
+			return reply_arity(r, "$watchdog", "0 or 1 argument", ntok);
 		if (ntok == 2 && np_parse_int(argv[1], 0, 60000, &ms) != NP_OK)
-			return reply_error(c, r, "%d $watchdog: %s is not a time in 0..60000 ms",
-					   CONSOLE_E_RANGE, argv[1]);
+			return console_fail(r, CONSOLE_E_RANGE,
+					    "$watchdog: %s is not a time in 0..60000 ms", argv[1]);
 		if (ntok == 2)
 			vehicle_set_link_timeout(c->v, (uint32_t)ms);
-		rb_printf(r, "ok watchdog %lu", (unsigned long)vehicle_link_timeout(c->v));
+		console_put(r, "ok watchdog %lu", (unsigned long)vehicle_link_timeout(c->v));
 		return true;
 	}
 	if (np_streq_nocase(cmd, "$jerk"))
@@ -448,7 +443,7 @@ static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_
 	bool version = np_streq_nocase(cmd, "$version");
 	if (version || np_streq_nocase(cmd, "$diag")) {
 		if (ntok != 1)
-			return reply_arity(c, r, cmd, "0 arguments", ntok);
+			return reply_arity(r, cmd, "0 arguments", ntok);
 		if (version) {
 			const char *fw = "", *ifv = "";
 
@@ -458,19 +453,19 @@ static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_
 			rb_quoted(r, fw ? fw : "");
 			rb_puts(r, " interface ");
 			rb_quoted(r, ifv ? ifv : "");
-			rb_printf(r, " protocol %d table 0x%04X", CMD_PROTO_VERSION,
-				  (unsigned)cmd_table_crc());
+			console_put(r, " protocol %d table 0x%04X", CMD_PROTO_VERSION,
+				    (unsigned)cmd_table_crc());
 		} else {
 			vs_diag_t d;
 
 			memset(&d, 0, sizeof(d));
 			vehicle_diag(c->v, &d);
-			rb_printf(r,
-				  "ok ticks %lu overruns %lu late %lu max_late_us %lu mode %s "
-				  "queue %u ref",
-				  (unsigned long)d.ticks, (unsigned long)d.overruns,
-				  (unsigned long)d.late_ticks, (unsigned long)d.max_late_us,
-				  mode_name(d.mode), (unsigned)d.queue_len);
+			console_put(r,
+				    "ok ticks %lu overruns %lu late %lu max_late_us %lu mode %s "
+				    "queue %u ref",
+				    (unsigned long)d.ticks, (unsigned long)d.overruns,
+				    (unsigned long)d.late_ticks, (unsigned long)d.max_late_us,
+				    mode_name(d.mode), (unsigned)d.queue_len);
 			rb_pose(r, &d.ref_pose);
 			rb_puts(r, " odom");
 			rb_pose(r, &d.odom_pose);
@@ -496,7 +491,7 @@ static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_
 		r->buf[0] = '\0';
 		r->len = 0;
 	}
-	return reply_error(c, r, "%d unknown command %s", CONSOLE_E_UNKNOWN_OP, cmd);
+	return console_fail(r, CONSOLE_E_UNKNOWN_OP, "unknown command %s", cmd);
 }
 
 static bool is_space(char ch)
@@ -526,15 +521,15 @@ static bool exec_line(console_t *c, const char *line, size_t len, rbuf_t *r)
 		return false;
 	if (len > CONSOLE_LINE_MAX) {
 		c->lines++;
-		return reply_error(c, r, "%d line too long (max %d bytes)", CONSOLE_E_TOO_LONG,
-				   CONSOLE_LINE_MAX);
+		return console_fail(r, CONSOLE_E_TOO_LONG, "line too long (max %d bytes)",
+				    CONSOLE_LINE_MAX);
 	}
 	for (size_t k = 0; k < len; k++) {
 		unsigned char b = (unsigned char)line[k];
 
 		if ((b < 0x20 && b != '\t' && b != '\r' && b != '\n') || b >= 0x7f) {
 			c->lines++;
-			return reply_error(c, r, "%d binary data in line", CONSOLE_E_BINARY);
+			return console_fail(r, CONSOLE_E_BINARY, "binary data in line");
 		}
 	}
 	memcpy(buf, line, len);
@@ -557,8 +552,8 @@ static bool exec_line(console_t *c, const char *line, size_t len, rbuf_t *r)
 
 	if (argv[0][0] == '$') {
 		if (ntok > CONSOLE_ARGV_MAX)
-			return reply_error(c, r, "%d %s: too many arguments (%u)", CONSOLE_E_ARITY,
-					   argv[0], ntok - 1);
+			return console_fail(r, CONSOLE_E_ARITY, "%s: too many arguments (%u)",
+					    argv[0], ntok - 1);
 		bool said = exec_extra(c, (int)ntok, argv, ntok, r, &scratch);
 		if (said && r->len >= 2 && r->buf[0] == 'o' && r->buf[1] == 'k')
 			vehicle_link_heard(c->v, VS_LINK_CONSOLE);
@@ -567,10 +562,10 @@ static bool exec_line(console_t *c, const char *line, size_t len, rbuf_t *r)
 
 	d = cmd_by_name(argv[0]);
 	if (!d)
-		return reply_error(c, r, "%d unknown operation %s", CONSOLE_E_UNKNOWN_OP, argv[0]);
+		return console_fail(r, CONSOLE_E_UNKNOWN_OP, "unknown operation %s", argv[0]);
 	if (ntok - 1 != d->n_in)
-		return reply_error(c, r, "%d %s takes %u argument%s, got %u", CONSOLE_E_ARITY,
-				   d->name, d->n_in, d->n_in == 1 ? "" : "s", ntok - 1);
+		return console_fail(r, CONSOLE_E_ARITY, "%s takes %u argument%s, got %u", d->name,
+				    d->n_in, d->n_in == 1 ? "" : "s", ntok - 1);
 
 	for (unsigned k = 0; k < d->n_in; k++) {
 		const char *tok = argv[k + 1], *fn, *why = NULL;
@@ -602,13 +597,13 @@ static bool exec_line(console_t *c, const char *line, size_t len, rbuf_t *r)
 			}
 		} else {
 			/* The table never has other in types; refuse rather than guess. */
-			return reply_error(c, r, "%d %s: unsupported argument type",
-					   CONSOLE_E_NUMBER, d->name);
+			return console_fail(r, CONSOLE_E_NUMBER, "%s: unsupported argument type",
+					    d->name);
 		}
 		if (why) {
 			/* "CODE OP FIELD", then the text $config shares */
-			reply_error(c, r, "%d %s %.*s", code, d->name, fl, fn);
-			rb_printf(r, why, tok, (long long)lo, (long long)hi);
+			console_fail(r, code, "%s %.*s", d->name, fl, fn);
+			console_put(r, why, tok, (long long)lo, (long long)hi);
 			return true;
 		}
 	}
@@ -646,7 +641,7 @@ bool console_exec(console_t *c, const char *line, char *reply, size_t cap)
 
 	len += strnlen(line + len, CONSOLE_LINE_MAX + 1);
 
-	rb_init(&r, reply, cap);
+	rb_init(&r, reply, cap, &c->errors);
 	return exec_line(c, line, len, &r);
 }
 
@@ -662,7 +657,7 @@ static void end_line(console_t *c)
 	char reply[CONSOLE_REPLY_MAX + 1];
 	rbuf_t r;
 
-	rb_init(&r, reply, CONSOLE_REPLY_MAX);
+	rb_init(&r, reply, CONSOLE_REPLY_MAX, &c->errors);
 	if (exec_line(c, c->line, c->len, &r))
 		emit(c, reply, r.len);
 	c->len = 0;

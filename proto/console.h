@@ -67,11 +67,25 @@ void console_set_extra(console_t *c, console_extra_fn fn, void *ctx);
 /* $config changes, compares and saves through keep (firmware/config_keep.h,
  * attached to the same unit); without one it only reads. */
 void console_set_keep(console_t *c, struct cfgkeep *keep);
+/* A reply under construction (console.c, console_config.c): never written
+ * past cap, NUL-terminated when cap > 0; an error counted in *errors
+ * (NULL: not counted). */
+typedef struct {
+	char *buf;
+	size_t cap, len;
+	uint32_t *errors;
+} console_out_t;
+/* Appends, as fmt.h formats. */
+__attribute__((format(printf, 2, 3))) void console_put(console_out_t *o, const char *fmt, ...);
+/* Replaces the reply with "error CODE " and the text, counts the error;
+ * true (the line is answered). */
+__attribute__((format(printf, 3, 4))) bool console_fail(console_out_t *o, int code, const char *fmt,
+							...);
 /* The $config extra (console_config.c): the reply, "ok ..." or "error ...",
- * into reply (cap bytes); scratch: room for the saved form while $config
+ * into o, which is empty; scratch: room for the saved form while $config
  * save writes it (VS_CFGSAVE_MAX bytes, firmware/config_save.h). */
-void console_config(console_t *c, char **argv, unsigned ntok, char *reply, size_t cap,
-		    void *scratch, size_t scratch_cap);
+void console_config(console_t *c, char **argv, unsigned ntok, console_out_t *o, void *scratch,
+		    size_t scratch_cap);
 /* What the configuration store held at start, as $config store answers it
  * without "ok " (a main's log line). */
 void console_config_store(const struct cfgkeep *k, char *buf, size_t cap);

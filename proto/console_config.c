@@ -11,7 +11,6 @@
  * Values are parsed by type without floating point on a board (Q32), and
  * judged by vs_config_check and the table's when column (config_keep.h).
  */
-#include <stdarg.h>
 #include <string.h>
 
 #include "../firmware/config_keep.h"
@@ -53,33 +52,7 @@ _Static_assert(sizeof(cmd_scratch_t) >= VS_CFGSAVE_MAX, "the saved form fits the
 VS_CONFIG_FIELDS(ROW_FITS)
 #undef ROW_FITS
 
-typedef struct {
-	char *buf;
-	size_t cap, len;
-} out_t;
-
-__attribute__((format(printf, 2, 3))) static void put(out_t *o, const char *fmt, ...)
-{
-	va_list ap;
-	if (o->len + 1 >= o->cap)
-		return;
-	va_start(ap, fmt);
-	size_t n = fmt_v(o->buf + o->len, o->cap - o->len, fmt, ap);
-	va_end(ap);
-	o->len += n < o->cap - o->len ? n : o->cap - o->len - 1;
-}
-
-/* Replaces the reply with "error CODE ...". */
-__attribute__((format(printf, 3, 4))) static void fail(out_t *o, int code, const char *fmt, ...)
-{
-	va_list ap;
-	o->len = 0;
-	put(o, "error %d ", code);
-	va_start(ap, fmt);
-	size_t n = fmt_v(o->buf + o->len, o->cap - o->len, fmt, ap);
-	va_end(ap);
-	o->len += n < o->cap - o->len ? n : o->cap - o->len - 1;
-}
+typedef console_out_t out_t;
 
 /* Row f's elements in c (a configuration or its rows), each after a space,
  * as the operations' replies write numbers. */
@@ -90,19 +63,22 @@ static void put_values(out_t *o, const void *c, const vs_config_field_t *f)
 		char tmp[NP_FIXED3_MAX];
 		switch (f->type) {
 		case VS_CFG_DOUBLE:
-			put(o, " %s", console_real3(((const vs_real_t *)(const void *)p)[k], tmp));
+			console_put(o, " %s",
+				    console_real3(((const vs_real_t *)(const void *)p)[k], tmp));
 			break;
 		case VS_CFG_U32:
-			put(o, " %lu", (unsigned long)((const uint32_t *)(const void *)p)[k]);
+			console_put(o, " %lu",
+				    (unsigned long)((const uint32_t *)(const void *)p)[k]);
 			break;
 		case VS_CFG_U16:
-			put(o, " %u", (unsigned)((const uint16_t *)(const void *)p)[k]);
+			console_put(o, " %u", (unsigned)((const uint16_t *)(const void *)p)[k]);
 			break;
 		case VS_CFG_BOOL:
-			put(o, "%s", ((const bool *)(const void *)p)[k] ? " true" : " false");
+			console_put(o, "%s",
+				    ((const bool *)(const void *)p)[k] ? " true" : " false");
 			break;
 		default:
-			put(o, " %d", (int)((const vs_kinematics_t *)(const void *)p)[k]);
+			console_put(o, " %d", (int)((const vs_kinematics_t *)(const void *)p)[k]);
 			break;
 		}
 	}
@@ -110,10 +86,10 @@ static void put_values(out_t *o, const void *c, const vs_config_field_t *f)
 
 static void put_field(out_t *o, console_t *c, const vs_config_field_t *f)
 {
-	put(o, "ok %s", f->name);
+	console_put(o, "ok %s", f->name);
 	put_values(o, &c->v->cfg, f);
 	if (c->keep && cfgkeep_pending(c->keep, f)) {
-		put(o, " pending");
+		console_put(o, " pending");
 		put_values(o, c->keep->want.b, f);
 	}
 }
@@ -195,8 +171,8 @@ static bool parse_value(out_t *o, const vs_config_field_t *f, const char *tok, v
 		}
 		break;
 	}
-	fail(o, code, "$config %s", f->name);
-	put(o, why, tok, (long long)0, (long long)hi);
+	console_fail(o, code, "$config %s", f->name);
+	console_put(o, why, tok, (long long)0, (long long)hi);
 	return false;
 }
 
@@ -207,19 +183,19 @@ static void refused(out_t *o, const char *what, cfgkeep_result_t r, const char *
 		field = "?";
 	switch (r) {
 	case CFGKEEP_REJECTED:
-		fail(o, CONSOLE_E_EXTRA, "$config %s: %s: rejected by the configuration check",
-		     what, field);
+		console_fail(o, CONSOLE_E_EXTRA,
+			     "$config %s: %s: rejected by the configuration check", what, field);
 		break;
 	case CFGKEEP_NOT_IDLE:
-		fail(o, CONSOLE_E_EXTRA,
-		     "$config %s: %s changes only with the servo off and no motion queued", what,
-		     field);
+		console_fail(o, CONSOLE_E_EXTRA,
+			     "$config %s: %s changes only with the servo off and no motion queued",
+			     what, field);
 		break;
 	case CFGKEEP_NO_STORE:
-		fail(o, CONSOLE_E_EXTRA, "$config %s: this unit has no store", what);
+		console_fail(o, CONSOLE_E_EXTRA, "$config %s: this unit has no store", what);
 		break;
 	default:
-		fail(o, CONSOLE_E_EXTRA, "$config %s: store failed: %s", what, field);
+		console_fail(o, CONSOLE_E_EXTRA, "$config %s: store failed: %s", what, field);
 		break;
 	}
 }
@@ -234,8 +210,8 @@ static void set_field(out_t *o, console_t *c, const vs_config_field_t *f, int el
 	uint64_t v[VS_MAX_AXES];
 	const char *bad = NULL;
 	if (nv != want) {
-		fail(o, CONSOLE_E_ARITY, "$config %s takes %u value%s, got %u", f->name, want,
-		     want == 1 ? "" : "s", nv);
+		console_fail(o, CONSOLE_E_ARITY, "$config %s takes %u value%s, got %u", f->name,
+			     want, want == 1 ? "" : "s", nv);
 		return;
 	}
 	for (unsigned i = 0; i < nv; i++)
@@ -261,10 +237,10 @@ static void put_names(out_t *o, cfgkeep_t *k, const char *label,
 	unsigned n = 0;
 	for (unsigned i = 0; i < VS_CONFIG_NFIELDS; i++)
 		n += differs(k, &vs_config_fields[i]);
-	put(o, " %s %u", label, n);
+	console_put(o, " %s %u", label, n);
 	for (unsigned i = 0; i < VS_CONFIG_NFIELDS; i++)
 		if (differs(k, &vs_config_fields[i]))
-			put(o, " %s", vs_config_fields[i].name);
+			console_put(o, " %s", vs_config_fields[i].name);
 }
 
 static unsigned count_pending(cfgkeep_t *k)
@@ -283,14 +259,16 @@ static void put_store(out_t *o, const cfgkeep_boot_t *b)
 	    [CFGKEEP_BOOT_IO] = "unreadable",	[CFGKEEP_BOOT_MALFORMED] = "malformed",
 	    [CFGKEEP_BOOT_FOREIGN] = "foreign", [CFGKEEP_BOOT_REJECTED] = "rejected",
 	};
-	put(o, "store %s", names[b->result]);
+	console_put(o, "store %s", names[b->result]);
 	if (b->result >= CFGKEEP_BOOT_LOADED && b->result != CFGKEEP_BOOT_CORRUPT &&
 	    b->result != CFGKEEP_BOOT_IO)
-		put(o, " seq %lu schema 0x%08lX applied %u dropped %u", (unsigned long)b->seq,
-		    (unsigned long)b->schema, b->applied, b->dropped);
+		console_put(o, " seq %lu schema 0x%08lX applied %u dropped %u",
+			    (unsigned long)b->seq, (unsigned long)b->schema, b->applied,
+			    b->dropped);
 	if (b->result == CFGKEEP_BOOT_REJECTED)
-		put(o, " field %s", b->bad_field ? b->bad_field : "?");
-	put(o, " table 0x%08lX%s", (unsigned long)vs_config_schema(), b->other_torn ? " torn" : "");
+		console_put(o, " field %s", b->bad_field ? b->bad_field : "?");
+	console_put(o, " table 0x%08lX%s", (unsigned long)vs_config_schema(),
+		    b->other_torn ? " torn" : "");
 }
 
 /* The subcommands that need the keeper; false: argv[1] is none of them. */
@@ -307,17 +285,19 @@ static bool keeper_command(out_t *o, console_t *c, char **argv, unsigned ntok, v
 	if (i == 5)
 		return false;
 	if (ntok != 2) {
-		fail(o, CONSOLE_E_ARITY, "$config %s takes 0 arguments, got %u", cmds[i], ntok - 2);
+		console_fail(o, CONSOLE_E_ARITY, "$config %s takes 0 arguments, got %u", cmds[i],
+			     ntok - 2);
 		return true;
 	}
 	if (!k) {
-		fail(o, CONSOLE_E_EXTRA, "$config %s: this unit keeps no configuration", cmds[i]);
+		console_fail(o, CONSOLE_E_EXTRA, "$config %s: this unit keeps no configuration",
+			     cmds[i]);
 		return true;
 	}
 	cfgkeep_sync(k);
 	switch (i) {
 	case 0:
-		put(o, "ok");
+		console_put(o, "ok");
 		put_names(o, k, "unsaved", cfgkeep_unsaved);
 		put_names(o, k, "changed", cfgkeep_changed);
 		put_names(o, k, "pending", cfgkeep_pending);
@@ -327,7 +307,7 @@ static bool keeper_command(out_t *o, console_t *c, char **argv, unsigned ntok, v
 		if (r != CFGKEEP_OK) {
 			refused(o, cmds[i], r, bad);
 		} else {
-			put(o, "ok");
+			console_put(o, "ok");
 			put_names(o, k, "saved", cfgkeep_changed);
 		}
 		return true;
@@ -337,10 +317,10 @@ static bool keeper_command(out_t *o, console_t *c, char **argv, unsigned ntok, v
 		if (r != CFGKEEP_OK && r != CFGKEEP_PENDING)
 			refused(o, cmds[i], r, bad);
 		else
-			put(o, "ok %s pending %u", cmds[i], count_pending(k));
+			console_put(o, "ok %s pending %u", cmds[i], count_pending(k));
 		return true;
 	default:
-		put(o, "ok ");
+		console_put(o, "ok ");
 		put_store(o, &k->boot);
 		return true;
 	}
@@ -348,7 +328,7 @@ static bool keeper_command(out_t *o, console_t *c, char **argv, unsigned ntok, v
 
 void console_config_store(const struct cfgkeep *k, char *buf, size_t cap)
 {
-	out_t o = {buf, cap, 0};
+	out_t o = {buf, cap, 0, NULL};
 	if (cap)
 		buf[0] = '\0';
 	put_store(&o, &k->boot);
@@ -356,7 +336,7 @@ void console_config_store(const struct cfgkeep *k, char *buf, size_t cap)
 
 void console_config_diag(const console_t *c, char *buf, size_t cap)
 {
-	out_t o = {buf, cap, 0};
+	out_t o = {buf, cap, 0, NULL};
 	const cfgkeep_boot_t *b = c->keep ? &c->keep->boot : NULL;
 	if (cap)
 		buf[0] = '\0';
@@ -364,39 +344,37 @@ void console_config_diag(const console_t *c, char *buf, size_t cap)
 		return;
 	if (b->result == CFGKEEP_BOOT_LOADED && b->schema == vs_config_schema())
 		return;
-	put(&o, " config ");
+	console_put(&o, " config ");
 	put_store(&o, b);
 }
 
-void console_config(console_t *c, char **argv, unsigned ntok, char *reply, size_t cap,
-		    void *scratch, size_t scratch_cap)
+void console_config(console_t *c, char **argv, unsigned ntok, out_t *o, void *scratch,
+		    size_t scratch_cap)
 {
-	out_t o = {reply, cap, 0};
 	const vs_config_field_t *f;
 	int elem;
-	if (cap)
-		reply[0] = '\0';
 	if (ntok == 1) {
-		put(&o, "ok");
+		console_put(o, "ok");
 		for (unsigned i = 0; i < VS_CONFIG_NFIELDS; i++)
-			put(&o, " %s", vs_config_fields[i].name);
+			console_put(o, " %s", vs_config_fields[i].name);
 		return;
 	}
-	if (keeper_command(&o, c, argv, ntok, scratch, scratch_cap))
+	if (keeper_command(o, c, argv, ntok, scratch, scratch_cap))
 		return;
 	f = find_field(argv[1], &elem);
 	if (!f) {
-		fail(&o, CONSOLE_E_EXTRA, "$config: no field %s", argv[1]);
+		console_fail(o, CONSOLE_E_EXTRA, "$config: no field %s", argv[1]);
 		return;
 	}
 	if (ntok == 2 && elem < 0) {
-		put_field(&o, c, f);
+		put_field(o, c, f);
 		return;
 	}
 	if (!c->keep) {
-		fail(&o, CONSOLE_E_EXTRA, "$config %s: this unit keeps no configuration", f->name);
+		console_fail(o, CONSOLE_E_EXTRA, "$config %s: this unit keeps no configuration",
+			     f->name);
 		return;
 	}
-	set_field(&o, c, f, elem, argv + 2, ntok - 2);
+	set_field(o, c, f, elem, argv + 2, ntok - 2);
 }
 #endif
