@@ -697,6 +697,16 @@ static void test_alarm_sequence(void **state)
 	EXPECT("getActiveAlarm -1", "ok true 1 0");
 	EXPECT("getActiveAlarm -32768", "ok true 1 0");
 	EXPECT("getActiveAlarm 32767", "ok true 1 1 121 warning \"moveTurn refused: servo off\"");
+	/* An alarm fits whole or not at all: 53 bytes of reply, the NUL and
+	 * the count's third byte held back. */
+	{
+		char fit[55];
+
+		assert_true(console_exec(&con, "getActiveAlarm 1", fit, 55));
+		assert_string_equal(fit, "ok true 1 1 121 warning \"moveTurn refused: servo off\"");
+		assert_true(console_exec(&con, "getActiveAlarm 1", fit, 54));
+		assert_string_equal(fit, "ok true 1 0");
+	}
 	alarm_raise(&veh.alarms, 205, "say \"hi\" \\ \x01 back");
 	EXPECT("getActiveAlarm 1", "ok true 2 1 205 fault \"say \\\"hi\\\" \\\\ \\x01 back\"");
 	EXPECT("getActiveAlarm 2", "ok true 2 2 205 fault \"say \\\"hi\\\" \\\\ \\x01 back\" "
