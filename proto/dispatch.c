@@ -29,6 +29,7 @@ bool cmd_invoke(vehicle_t *v, const cmd_def_t *d, const cmd_value_t in[], cmd_va
 	vs_position_t pos = {0, 0, 0};
 	vs_velocity_t vel = {0, 0};
 	bool r = false;
+	unsigned op = cmd_opcode(d);
 
 	/* Every out field starts defined, whatever the operation does. */
 	for (unsigned i = 0; i < d->n_out; i++) {
@@ -39,7 +40,7 @@ bool cmd_invoke(vehicle_t *v, const cmd_def_t *d, const cmd_value_t in[], cmd_va
 			out[i].alarms.a = scratch->alarms;
 	}
 
-	switch (cmd_opcode(d)) {
+	switch (op) {
 	case CMD_OP_clearAlarm:
 		return vs_clearAlarm(v);
 	case CMD_OP_getAccelerationLimit:
@@ -95,18 +96,12 @@ bool cmd_invoke(vehicle_t *v, const cmd_def_t *d, const cmd_value_t in[], cmd_va
 		return r;
 	case CMD_OP_moveCircularRel:
 		return vs_moveCircularRel(v, in_point(in), in[2].d);
-	case CMD_OP_moveContinuousRel:
-		return vs_moveContinuousRel(v, in_pos(in));
 	case CMD_OP_moveCruiseAbs:
 		return vs_moveCruiseAbs(v, in_point(in));
 	case CMD_OP_moveForward:
 		return vs_moveForward(v, in[0].d);
 	case CMD_OP_moveJog:
 		return vs_moveJog(v, in[0].d, in[1].d, in[2].d);
-	case CMD_OP_moveLinearAbs:
-		return vs_moveLinearAbs(v, in_pos(in));
-	case CMD_OP_moveLinearRel:
-		return vs_moveLinearRel(v, in_pos(in));
 	case CMD_OP_moveTurn:
 		return vs_moveTurn(v, in[0].d);
 	case CMD_OP_pause:
@@ -123,8 +118,6 @@ bool cmd_invoke(vehicle_t *v, const cmd_def_t *d, const cmd_value_t in[], cmd_va
 		return vs_setJoystick(v, in[0].b);
 	case CMD_OP_setOutput:
 		return vs_setOutput(v, in[0].u, in[1].u, in[2].u);
-	case CMD_OP_setPosition:
-		return vs_setPosition(v, in_pos(in));
 	case CMD_OP_setPower:
 		return vs_setPower(v, in[0].b);
 	case CMD_OP_setServo:
@@ -135,6 +128,19 @@ bool cmd_invoke(vehicle_t *v, const cmd_def_t *d, const cmd_value_t in[], cmd_va
 		return vs_stop(v);
 	case CMD_OP_unlock:
 		return vs_unlock(v);
+	case CMD_OP_moveContinuousRel:
+	case CMD_OP_moveLinearAbs:
+	case CMD_OP_moveLinearRel:
+	case CMD_OP_setPosition:
+		/* the pose read once for the four that take one */
+		pos = in_pos(in);
+		if (op == CMD_OP_moveContinuousRel)
+			return vs_moveContinuousRel(v, pos);
+		if (op == CMD_OP_moveLinearAbs)
+			return vs_moveLinearAbs(v, pos);
+		if (op == CMD_OP_moveLinearRel)
+			return vs_moveLinearRel(v, pos);
+		return vs_setPosition(v, pos);
 	default:
 		return false;
 	}
