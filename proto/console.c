@@ -353,9 +353,15 @@ static void rb_idl_flat(rbuf_t *r, const cmd_def_t *d)
 static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_t *r,
 		       cmd_scratch_t *scratch)
 {
+	static const char *const names[] = {"$help",	 "$jerk",    "$config",
+					    "$watchdog", "$version", "$diag"};
 	const char *cmd = argv[0];
+	unsigned x = 0;
 
-	if (np_streq_nocase(cmd, "$help")) {
+	/* one comparison loop for the console's own extras */
+	while (x < sizeof names / sizeof names[0] && !np_streq_nocase(cmd, names[x]))
+		x++;
+	if (x == 0) {
 		if (ntok == 1) {
 			rb_puts(r, "ok");
 			for (unsigned i = 0; i < CMD_COUNT; i++) {
@@ -387,7 +393,9 @@ static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_
 		}
 		return reply_arity(r, "$help", "0 or 1 argument", ntok);
 	}
-	if (np_streq_nocase(cmd, "$config")) {
+	if (x == 1)
+		return exec_jerk(c, argv, ntok, r);
+	if (x == 2) {
 #ifdef VS_NO_CONFIG_EXTRA
 		/* Its configuration is compiled in. */
 		(void)scratch;
@@ -399,7 +407,7 @@ static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_
 		return true;
 #endif
 	}
-	if (np_streq_nocase(cmd, "$watchdog")) {
+	if (x == 3) {
 		/* The link watchdog's timeout: read, or set for this run (0 =
 		 * off; hands-on bring-up, a lockstep harness). */
 		int64_t ms = 0;
@@ -413,10 +421,9 @@ static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_
 		console_put(r, "ok watchdog %lu", (unsigned long)vehicle_link_timeout(c->v));
 		return true;
 	}
-	if (np_streq_nocase(cmd, "$jerk"))
-		return exec_jerk(c, argv, ntok, r);
-	bool version = np_streq_nocase(cmd, "$version");
-	if (version || np_streq_nocase(cmd, "$diag")) {
+	if (x < sizeof names / sizeof names[0]) {
+		bool version = x == 4;
+
 		if (ntok != 1)
 			return reply_arity(r, cmd, "0 arguments", ntok);
 		if (version) {
