@@ -127,6 +127,9 @@ static void test_table_order_and_opcodes(void **state)
 		assert_ptr_equal(cmd_by_opcode(i + 1), &cmd_table[i]);
 		assert_ptr_equal(cmd_by_name(spec_order[i]), &cmd_table[i]);
 	}
+	/* cmd_by_name searches the rows as they stand: in the names' order */
+	for (unsigned i = 1; i < 34; i++)
+		assert_true(np_cmp_nocase(cmd_table[i - 1].name, cmd_table[i].name) < 0);
 	assert_null(cmd_by_opcode(0));
 	assert_null(cmd_by_opcode(35));
 	assert_ptr_equal(cmd_by_name("MOVEFORWARD"), &cmd_table[16]);
