@@ -28,7 +28,6 @@ static void rb_init(rbuf_t *r, char *buf, size_t cap, uint32_t *errors)
 	r->cap = cap;
 	r->len = 0;
 	r->errors = errors;
-	r->cut = false;
 	if (cap)
 		buf[0] = '\0';
 }
@@ -40,10 +39,8 @@ static size_t rb_room(const rbuf_t *r)
 
 static void rb_putn(rbuf_t *r, const char *s, size_t n)
 {
-	if (n > rb_room(r)) {
+	if (n > rb_room(r))
 		n = rb_room(r);
-		r->cut = true;
-	}
 	if (!n)
 		return;
 	memcpy(r->buf + r->len, s, n);
@@ -113,25 +110,23 @@ static size_t escape_byte(char e[4], unsigned char b)
 	return 4;
 }
 
-/* A double-quoted string of at most max bytes (escape_byte). */
-static void rb_quoted(rbuf_t *r, const char *s, size_t max)
+/* A double-quoted string (escape_byte). */
+static void rb_quoted(rbuf_t *r, const char *s)
 {
-	size_t i = 0;
-
 	rb_puts(r, "\"");
-	for (;;) {
-		size_t run = i;
+	for (const unsigned char *p = (const unsigned char *)s; *p;) {
+		const unsigned char *run = p;
 		char e[4];
 
 		/* Plain bytes in one copy: a byte at a time costs a reply of
 		 * alarm texts thousands of instructions on a microcontroller. */
-		while (i < max && plain_byte((unsigned char)s[i]))
-			i++;
-		rb_putn(r, s + run, i - run);
-		if (i >= max || !s[i])
+		while (*p && plain_byte(*p))
+			p++;
+		rb_putn(r, (const char *)run, (size_t)(p - run));
+		if (!*p)
 			break;
-		rb_putn(r, e, escape_byte(e, (unsigned char)s[i]));
-		i++;
+		rb_putn(r, e, escape_byte(e, *p));
+		p++;
 	}
 	rb_puts(r, "\"");
 }
@@ -151,21 +146,62 @@ static size_t put_uint(char *d, unsigned long v)
 	return n;
 }
 
-/* The type between the blanks around it. */
 static const char *alarm_type_name(uint8_t t)
 {
 	switch (t) {
 	case VS_ALARM_FAULT:
-		return " fault ";
+		return "fault";
 	case VS_ALARM_WARNING:
-		return " warning ";
+		return "warning";
 	default:
-		return " unknown ";
+		return "unknown";
 	}
 }
 
-/* " k": the alarm sequence's length, an alarm's code */
-static size_t put_count(char *d, unsigned long k)
+/* One alarm, " code type "source"", at d (at most end - d bytes): its
+ * length, or 0 when it does not fit whole. One pass over the source, which
+ * need not be terminated by whoever filled it (VS_ALARM_SOURCE_MAX). */
+static size_t put_alarm(char *d, const char *end, const vs_alarm_t *a)
+{
+	char *p = d, num[20];
+	size_t k = put_uint(num, a->code);
+	const char *t = alarm_type_name(a->type);
+	size_t tl = strlen(t);
+
+	if ((size_t)(end - p) < 1 + k + 1 + tl + 2)
+		return 0;
+	*p++ = ' ';
+	memcpy(p, num, k);
+	p += k;
+	*p++ = ' ';
+	for (size_t q = 0; q < tl; q++)
+		*p++ = t[q];
+	*p++ = ' ';
+	*p++ = '"';
+	for (size_t i = 0, j; i < VS_ALARM_SOURCE_MAX - 1 && a->source[i]; i = j + 1) {
+		/* a run of plain bytes in one copy, then the byte that ends it */
+		for (j = i; j < VS_ALARM_SOURCE_MAX - 1 && plain_byte((unsigned char)a->source[j]);
+		     j++)
+			;
+		if ((size_t)(end - p) < j - i + 1)
+			return 0;
+		memcpy(p, a->source + i, j - i);
+		p += j - i;
+		if (j >= VS_ALARM_SOURCE_MAX - 1 || !a->source[j])
+			break;
+		char e[4];
+		size_t el = escape_byte(e, (unsigned char)a->source[j]);
+		if ((size_t)(end - p) < el + 1)
+			return 0;
+		memcpy(p, e, el);
+		p += el;
+	}
+	*p++ = '"';
+	return (size_t)(p - d);
+}
+
+/* " k", the alarm sequence's length */
+static size_t put_count(char *d, uint16_t k)
 {
 	d[0] = ' ';
 	return 1 + put_uint(d + 1, k);
@@ -182,7 +218,7 @@ static size_t put_count(char *d, unsigned long k)
 static void rb_alarms(rbuf_t *r, const cmd_alarms_t *s)
 {
 	uint16_t n = s->n > VS_ALARM_LIST_MAX ? VS_ALARM_LIST_MAX : s->n;
-	size_t at = r->len, cap = r->cap, cl;
+	size_t at = r->len, cl;
 	uint16_t k = 0;
 	char cnt[3];
 
@@ -193,24 +229,13 @@ static void rb_alarms(rbuf_t *r, const cmd_alarms_t *s)
 	 * the length is put right, moving the alarms when it is shorter. */
 	cl = put_count(r->buf + at, n);
 	r->len += cl;
-	r->cap -= 3 - cl;
 	for (; k < n; k++) {
-		/* " code type "source"", whole or not at all; the source
-		 * need not be terminated by whoever filled it */
-		const vs_alarm_t *a = &s->a[k];
-		size_t was = r->len;
-		char num[21];
+		size_t l = put_alarm(r->buf + r->len, r->buf + r->cap - 1 - (3 - cl), &s->a[k]);
 
-		r->cut = false;
-		rb_putn(r, num, put_count(num, a->code));
-		rb_puts(r, alarm_type_name(a->type));
-		rb_quoted(r, a->source, VS_ALARM_SOURCE_MAX - 1);
-		if (r->cut) {
-			r->len = was;
+		if (!l)
 			break;
-		}
+		r->len += l;
 	}
-	r->cap = cap;
 	if (k < n) {
 		size_t kl = put_count(cnt, k);
 
@@ -239,7 +264,7 @@ static void rb_value(rbuf_t *r, char type, const cmd_value_t *v)
 		break;
 	case CMD_T_STRING:
 		rb_puts(r, " ");
-		rb_quoted(r, v->s ? v->s : "", SIZE_MAX);
+		rb_quoted(r, v->s ? v->s : "");
 		break;
 	case CMD_T_ALARMS:
 		rb_alarms(r, &v->alarms);
@@ -432,9 +457,9 @@ static bool exec_extra(console_t *c, int argc, char **argv, unsigned ntok, rbuf_
 			vs_getVersion(c->v, &fw);
 			vs_getIFVersion(c->v, &ifv);
 			rb_puts(r, "ok firmware ");
-			rb_quoted(r, fw ? fw : "", SIZE_MAX);
+			rb_quoted(r, fw ? fw : "");
 			rb_puts(r, " interface ");
-			rb_quoted(r, ifv ? ifv : "", SIZE_MAX);
+			rb_quoted(r, ifv ? ifv : "");
 			console_put(r, " protocol %d table 0x%04X", CMD_PROTO_VERSION,
 				    (unsigned)cmd_table_crc());
 		} else {

@@ -69,13 +69,11 @@ void console_set_extra(console_t *c, console_extra_fn fn, void *ctx);
 void console_set_keep(console_t *c, struct cfgkeep *keep);
 /* A reply under construction (console.c, console_config.c): never written
  * past cap, NUL-terminated when cap > 0; an error counted in *errors
- * (NULL: not counted); cut once a string put in did not fit whole (the
- * alarm list keeps only the alarms that do). */
+ * (NULL: not counted). */
 typedef struct {
 	char *buf;
 	size_t cap, len;
 	uint32_t *errors;
-	bool cut;
 } console_out_t;
 /* Appends, as fmt.h formats. */
 __attribute__((format(printf, 2, 3))) void console_put(console_out_t *o, const char *fmt, ...);

@@ -328,7 +328,7 @@ static bool keeper_command(out_t *o, console_t *c, char **argv, unsigned ntok, v
 
 void console_config_store(const struct cfgkeep *k, char *buf, size_t cap)
 {
-	out_t o = {buf, cap, 0, NULL, false};
+	out_t o = {buf, cap, 0, NULL};
 	if (cap)
 		buf[0] = '\0';
 	put_store(&o, &k->boot);
@@ -336,7 +336,7 @@ void console_config_store(const struct cfgkeep *k, char *buf, size_t cap)
 
 void console_config_diag(const console_t *c, char *buf, size_t cap)
 {
-	out_t o = {buf, cap, 0, NULL, false};
+	out_t o = {buf, cap, 0, NULL};
 	const cfgkeep_boot_t *b = c->keep ? &c->keep->boot : NULL;
 	if (cap)
 		buf[0] = '\0';
