@@ -7,12 +7,10 @@
  */
 #include "console.h"
 
-#include <stdarg.h>
 #include <string.h>
 
 #include "cmdtab.h"
 #include "dispatch.h"
-#include "fmt.h"
 #include "numparse.h"
 
 /* Tokens kept per line: an operation needs at most 1 + CMD_MAX_FIELDS; '$'
@@ -51,28 +49,6 @@ static void rb_putn(rbuf_t *r, const char *s, size_t n)
 static void rb_puts(rbuf_t *r, const char *s)
 {
 	rb_putn(r, s, strlen(s));
-}
-
-__attribute__((format(printf, 2, 0))) static void rb_vprintf(rbuf_t *r, const char *fmt, va_list ap)
-{
-	size_t room = rb_room(r);
-	size_t n;
-
-	if (!r->cap)
-		return;
-	/* proto/fmt.c, not vsnprintf: the console's directives only (fmt.h). */
-	n = fmt_v(r->buf + r->len, room + 1, fmt, ap);
-	r->len += n < room ? n : room;
-	r->buf[r->len] = '\0';
-}
-
-void console_put(rbuf_t *r, const char *fmt, ...)
-{
-	va_list ap;
-
-	va_start(ap, fmt);
-	rb_vprintf(r, fmt, ap);
-	va_end(ap);
 }
 
 static void rb_real(rbuf_t *r, vs_real_t v)
@@ -272,22 +248,6 @@ static void rb_value(rbuf_t *r, char type, const cmd_value_t *v)
 	default:
 		break;
 	}
-}
-
-bool console_fail(rbuf_t *r, int code, const char *fmt, ...)
-{
-	va_list ap;
-
-	r->len = 0;
-	if (r->cap)
-		r->buf[0] = '\0';
-	console_put(r, "error %d ", code);
-	va_start(ap, fmt);
-	rb_vprintf(r, fmt, ap);
-	va_end(ap);
-	if (r->errors)
-		(*r->errors)++;
-	return true;
 }
 
 /* An extra's wrong argument count: "takes" the counts it takes, in words.

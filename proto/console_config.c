@@ -11,6 +11,7 @@
  * Values are parsed by type without floating point on a board (Q32), and
  * judged by vs_config_check and the table's when column (config_keep.h).
  */
+#include <stdarg.h>
 #include <string.h>
 
 #include "../firmware/config_keep.h"
@@ -30,6 +31,47 @@ const char *console_real3(vs_real_t v, char *tmp)
 {
 	np_fmt_real3(v, tmp);
 	return strcmp(tmp, "-0.000") == 0 ? "0.000" : tmp;
+}
+
+/* The reply writer of console.h, here too: console.c calls this file, not
+ * the other way round. */
+__attribute__((format(printf, 2, 0))) static void rb_vprintf(console_out_t *r, const char *fmt,
+							     va_list ap)
+{
+	size_t room = r->cap ? r->cap - 1 - r->len : 0;
+	size_t n;
+
+	if (!r->cap)
+		return;
+	/* proto/fmt.c, not vsnprintf: the console's directives only (fmt.h). */
+	n = fmt_v(r->buf + r->len, room + 1, fmt, ap);
+	r->len += n < room ? n : room;
+	r->buf[r->len] = '\0';
+}
+
+void console_put(console_out_t *r, const char *fmt, ...)
+{
+	va_list ap;
+
+	va_start(ap, fmt);
+	rb_vprintf(r, fmt, ap);
+	va_end(ap);
+}
+
+bool console_fail(console_out_t *r, int code, const char *fmt, ...)
+{
+	va_list ap;
+
+	r->len = 0;
+	if (r->cap)
+		r->buf[0] = '\0';
+	console_put(r, "error %d ", code);
+	va_start(ap, fmt);
+	rb_vprintf(r, fmt, ap);
+	va_end(ap);
+	if (r->errors)
+		(*r->errors)++;
+	return true;
 }
 
 #ifndef VS_NO_CONFIG_EXTRA
