@@ -104,18 +104,17 @@ volatile plant_cost_t plant_cost;
 static const vehicle_t *unit;
 mbd_bus_t plant_bus;
 
-static size_t p_read(void *ctx, uint8_t *buf, size_t max)
+/* The master's port, called directly (MBM_PORT_DIRECT, mbmaster.h). */
+size_t mbm_port_read(uint8_t *buf, size_t max)
 {
-	(void)ctx;
 	size_t n = 0;
 	while (n < max && (MBU->state & ST_RX_FULL))
 		buf[n++] = (uint8_t)MBU->data;
 	return n;
 }
 
-static void p_write(void *ctx, const uint8_t *buf, size_t n)
+void mbm_port_write(const uint8_t *buf, size_t n)
 {
-	(void)ctx;
 	tx_buf = buf;
 	tx_n = (uint8_t)n;
 	tx_at = 0;
@@ -124,21 +123,17 @@ static void p_write(void *ctx, const uint8_t *buf, size_t n)
 /* Moves what the transmitter takes; done when all has gone and the
  * transmitter is empty (a part with a transmission-complete flag tests
  * that: the driver must stay on until the stop bit is out). */
-static bool p_tx_done(void *ctx)
+bool mbm_port_tx_done(void)
 {
-	(void)ctx;
 	while (tx_at < tx_n && !(MBU->state & ST_TX_FULL))
 		MBU->data = tx_buf[tx_at++];
 	return tx_at == tx_n && !(MBU->state & ST_TX_FULL);
 }
 
-static void p_de(void *ctx, bool on)
+void mbm_port_de(bool on)
 {
-	(void)ctx;
 	FPGAIO_LED = on ? FPGAIO_LED | LED_DE : FPGAIO_LED & ~LED_DE;
 }
-
-static const mbm_port_t port = {p_read, p_write, p_tx_done, p_de, NULL};
 
 static uint32_t now_us(void)
 {
@@ -212,7 +207,7 @@ vs_hal_t plant_hal(const vs_config_t *cfg)
 	MBU->bauddiv = BOARD_CPU_HZ / BOARD_MB_BAUD;
 	MBU->ctrl = 3u;
 	FPGAIO_LED = 0;
-	mbd_init(&plant_bus, &board_mb_profile, &port, BOARD_MB_BAUD, MB_FRAME_BITS, MB_TIMEOUT_US,
+	mbd_init(&plant_bus, &board_mb_profile, NULL, BOARD_MB_BAUD, MB_FRAME_BITS, MB_TIMEOUT_US,
 		 MB_RETRIES, now_us());
 	plant_bus.comm_timeout_ms = MB_COMM_STOP_MS;
 	plant_bus.m.byte_us = MB_BYTE_US;

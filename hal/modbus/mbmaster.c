@@ -7,8 +7,24 @@ enum { ST_IDLE, ST_GAP, ST_TX, ST_WAIT };
  * mbmaster.h), its reads are constants the compiler folds. */
 #ifdef MBD_PROFILE
 #define BUS_PROF(b) (&MBD_PROFILE)
+#define PROF_INLINE inline __attribute__((always_inline))
 #else
 #define BUS_PROF(b) ((b)->prof)
+#define PROF_INLINE
+#endif
+
+/* The port's calls: a board's own functions (MBM_PORT_DIRECT), else
+ * through the port. */
+#ifdef MBM_PORT_DIRECT
+#define PORT_READ(m, buf, max) mbm_port_read(buf, max)
+#define PORT_WRITE(m, buf, n)  mbm_port_write(buf, n)
+#define PORT_TX_DONE(m)	       mbm_port_tx_done()
+#define PORT_DE(m, on)	       mbm_port_de(on)
+#else
+#define PORT_READ(m, buf, max) ((m)->port->read((m)->port->ctx, buf, max))
+#define PORT_WRITE(m, buf, n)  ((m)->port->write((m)->port->ctx, buf, n))
+#define PORT_TX_DONE(m)	       ((m)->port->tx_done((m)->port->ctx))
+#define PORT_DE(m, on)	       ((m)->port->de((m)->port->ctx, on))
 #endif
 
 uint32_t mbm_char_us(uint32_t baud, uint32_t frame_bits)
@@ -190,11 +206,10 @@ static uint8_t end_attempt(mbm_t *m, uint8_t r)
 
 uint8_t mbm_poll(mbm_t *m, uint32_t now_us)
 {
-	const mbm_port_t *p = m->port;
 	size_t k;
 	switch (m->state) {
 	case ST_WAIT:
-		k = p->read(p->ctx, m->rx + m->rxn, MBM_ADU_MAX - m->rxn);
+		k = PORT_READ(m, m->rx + m->rxn, MBM_ADU_MAX - m->rxn);
 		if (k) {
 			m->rxn = (uint8_t)(m->rxn + k);
 			m->t_line = now_us;
@@ -207,8 +222,8 @@ uint8_t mbm_poll(mbm_t *m, uint32_t now_us)
 			return end_attempt(m, m->rxn ? MBM_CUT : MBM_NO_REPLY);
 		return MBM_BUSY;
 	case ST_TX:
-		if (p->tx_done(p->ctx)) {
-			p->de(p->ctx, false);
+		if (PORT_TX_DONE(m)) {
+			PORT_DE(m, false);
 			m->t_line = now_us;
 			m->rxn = 0;
 			m->state = ST_WAIT;
@@ -217,11 +232,11 @@ uint8_t mbm_poll(mbm_t *m, uint32_t now_us)
 	default:
 		/* Idle or before a request: whatever comes is late or stray, and
 		 * the line must then be silent for the gap again. */
-		if (p->read(p->ctx, m->rx, MBM_ADU_MAX))
+		if (PORT_READ(m, m->rx, MBM_ADU_MAX))
 			m->t_line = now_us;
 		else if (m->state == ST_GAP && now_us - m->t_line >= m->quiet_us) {
-			p->de(p->ctx, true);
-			p->write(p->ctx, m->tx, m->txn);
+			PORT_DE(m, true);
+			PORT_WRITE(m, m->tx, m->txn);
 			m->cnt.requests++;
 			m->state = ST_TX;
 		}
@@ -276,7 +291,11 @@ void mbd_init(mbd_bus_t *b, const mb_profile_t *p, const mbm_port_t *port, uint3
 {
 	*b = (mbd_bus_t){0};
 	mbm_init(&b->m, port, baud, frame_bits, timeout_us, retries, now_us);
+#ifdef MBD_PROFILE
+	(void)p; /* read as BUS_PROF(b): no reference keeps the object */
+#else
 	b->prof = p;
+#endif
 	b->retries = retries;
 	b->cur = MBD_DRIVES - 1u;
 	b->cycle_start = now_us;
@@ -293,7 +312,7 @@ unsigned mbd_add(mbd_bus_t *b, uint8_t unit, uint8_t ch, bool reverse)
 	return b->nd++;
 }
 
-static bool write_reg(mbd_bus_t *b, const mbd_drive_t *d, unsigned r, int32_t v)
+static PROF_INLINE bool write_reg(mbd_bus_t *b, const mbd_drive_t *d, unsigned r, int32_t v)
 {
 	const mbp_reg_t *g = &BUS_PROF(b)->reg[r];
 	uint16_t w[2];

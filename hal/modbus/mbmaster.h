@@ -71,6 +71,16 @@ typedef struct {
 	void *ctx;
 } mbm_port_t;
 
+/* A board whose port is its own (-DMBM_PORT_DIRECT, mk/cortexm.mk) has
+ * these, the calls of mbm_port_t without ctx: the master calls them
+ * directly (mbm_init's port unused). */
+#ifdef MBM_PORT_DIRECT
+size_t mbm_port_read(uint8_t *buf, size_t max);
+void mbm_port_write(const uint8_t *buf, size_t n);
+bool mbm_port_tx_done(void);
+void mbm_port_de(bool on);
+#endif
+
 typedef struct {
 	uint32_t requests, retries, timeouts, crc_errors, bad, exceptions, busy, illegal;
 } mbm_count_t;

@@ -86,27 +86,6 @@ const char *mbp_reg_name(unsigned r)
 	return r < MBP_REG_COUNT ? reg_names[r] : "?";
 }
 
-int32_t mbp_get(const mbp_reg_t *r, const uint16_t *w)
-{
-	if (r->words == 2) {
-		uint32_t hi = (r->flags & MBP_LOW_FIRST) ? w[1] : w[0];
-		uint32_t lo = (r->flags & MBP_LOW_FIRST) ? w[0] : w[1];
-		return (int32_t)(hi << 16 | lo); /* u32 above 2^31 wraps: callers use s32 */
-	}
-	return (r->flags & MBP_SIGNED) ? (int32_t)(int16_t)w[0] : (int32_t)w[0];
-}
-
-void mbp_put(const mbp_reg_t *r, int32_t v, uint16_t *w)
-{
-	uint32_t u = (uint32_t)v;
-	if (r->words == 2) {
-		w[(r->flags & MBP_LOW_FIRST) ? 1 : 0] = (uint16_t)(u >> 16);
-		w[(r->flags & MBP_LOW_FIRST) ? 0 : 1] = (uint16_t)(u & 0xFFFFu);
-	} else {
-		w[0] = (uint16_t)(u & 0xFFFFu);
-	}
-}
-
 /* a / b rounded to the nearest, halves away from zero (b > 0). */
 static int64_t div_round(int64_t a, int64_t b)
 {
@@ -391,8 +370,9 @@ unsigned mbp_read_plan(const mb_profile_t *p, unsigned ch, unsigned max, mbp_rea
 	return out;
 }
 
-bool mbp_from_read(const mb_profile_t *p, unsigned r, unsigned ch, const mbp_read_t *rd,
-		   const uint16_t *regs, uint16_t *w)
+static inline __attribute__((always_inline)) bool from_read(const mb_profile_t *p, unsigned r,
+							    unsigned ch, const mbp_read_t *rd,
+							    const uint16_t *regs, uint16_t *w)
 {
 	const mbp_reg_t *g = &p->reg[r];
 	uint16_t a = mbp_addr(g, ch);
@@ -404,11 +384,19 @@ bool mbp_from_read(const mb_profile_t *p, unsigned r, unsigned ch, const mbp_rea
 	return true;
 }
 
+bool mbp_from_read(const mb_profile_t *p, unsigned r, unsigned ch, const mbp_read_t *rd,
+		   const uint16_t *regs, uint16_t *w)
+{
+	return from_read(p, r, ch, rd, regs, w);
+}
+
 void mbp_take_read(const mb_profile_t *p, unsigned ch, const mbp_read_t *rd, const uint16_t *regs,
 		   uint16_t val[MBP_REG_COUNT][2])
 {
+	/* unrolled: on a board's constant profile (MBD_PROFILE) each folds */
+#pragma GCC unroll 3
 	for (unsigned k = 0; k < 3; k++)
-		mbp_from_read(p, sample_regs[k], ch, rd, regs, val[sample_regs[k]]);
+		from_read(p, sample_regs[k], ch, rd, regs, val[sample_regs[k]]);
 }
 
 void mbp_sample_set(const mb_profile_t *p, mbp_sample_t *s, const uint16_t val[MBP_REG_COUNT][2])

@@ -115,10 +115,30 @@ static inline uint16_t mbp_addr(const mbp_reg_t *r, unsigned ch)
 	return (uint16_t)(r->addr + r->step * ch);
 }
 /* The value of a register from its words as read (1 or 2 words; sign
- * extended when signed). */
-int32_t mbp_get(const mbp_reg_t *r, const uint16_t *w);
-/* The words of a value (a 16-bit register takes the low 16 bits). */
-void mbp_put(const mbp_reg_t *r, int32_t v, uint16_t *w);
+ * extended when signed), and the words of a value (a 16-bit register takes
+ * the low 16 bits). Always inline: a board's compiled-in profile (MBD_PROFILE,
+ * mbmaster.h) folds them to a few moves. */
+static inline __attribute__((always_inline)) int32_t mbp_get(const mbp_reg_t *r, const uint16_t *w)
+{
+	if (r->words == 2) {
+		uint32_t hi = (r->flags & MBP_LOW_FIRST) ? w[1] : w[0];
+		uint32_t lo = (r->flags & MBP_LOW_FIRST) ? w[0] : w[1];
+		return (int32_t)(hi << 16 | lo); /* u32 above 2^31 wraps: callers use s32 */
+	}
+	return (r->flags & MBP_SIGNED) ? (int32_t)(int16_t)w[0] : (int32_t)w[0];
+}
+
+static inline __attribute__((always_inline)) void mbp_put(const mbp_reg_t *r, int32_t v,
+							  uint16_t *w)
+{
+	uint32_t u = (uint32_t)v;
+	if (r->words == 2) {
+		w[(r->flags & MBP_LOW_FIRST) ? 1 : 0] = (uint16_t)(u >> 16);
+		w[(r->flags & MBP_LOW_FIRST) ? 0 : 1] = (uint16_t)(u & 0xFFFFu);
+	} else {
+		w[0] = (uint16_t)(u & 0xFFFFu);
+	}
+}
 /* Target speed: counts/s to the register's words (rounded to the nearest
  * unit, saturated to the register's range), and back. */
 void mbp_speed_words(const mb_profile_t *p, int32_t cps, uint16_t *w);
