@@ -333,7 +333,7 @@ static bool enable_wanted(const mbd_bus_t *b, const mbd_drive_t *d)
 }
 
 /* The next request of drive d's cycle; false when the cycle is complete. */
-static bool issue(mbd_bus_t *b, mbd_drive_t *d)
+static bool issue(mbd_bus_t *b, mbd_drive_t *d, const mbp_read_t *rd, unsigned nrd)
 {
 	const mb_profile_t *p = BUS_PROF(b);
 	for (;;) {
@@ -376,8 +376,8 @@ static bool issue(mbd_bus_t *b, mbd_drive_t *d)
 			return mbm_write(&b->m, d->unit, mbp_addr(g, d->ch), g->words, w);
 		}
 		default: /* DS_READ */
-			if (b->sub < b->nrd) {
-				const mbp_read_t *r = &b->rd[b->sub];
+			if (b->sub < nrd) {
+				const mbp_read_t *r = &rd[b->sub];
 				return mbm_read(&b->m, d->unit, r->input, r->addr, r->n);
 			}
 			return false;
@@ -386,7 +386,7 @@ static bool issue(mbd_bus_t *b, mbd_drive_t *d)
 }
 
 /* The request of the current step succeeded. */
-static void step_done(mbd_bus_t *b, mbd_drive_t *d)
+static void step_done(mbd_bus_t *b, mbd_drive_t *d, const mbp_read_t *rd, unsigned nrd)
 {
 	switch (b->step) {
 	case DS_INIT:
@@ -403,13 +403,14 @@ static void step_done(mbd_bus_t *b, mbd_drive_t *d)
 	case DS_SPEED:
 		b->step = DS_READ;
 		b->sub = 0;
-		b->nrd = (uint8_t)mbp_read_plan(BUS_PROF(b), d->ch, MBM_READ_MAX, b->rd);
 		break;
-	default: { /* DS_READ */
+	default: { /* DS_READ: the read issue() made */
 		uint16_t regs[MBM_READ_MAX];
-		for (unsigned i = 0; i < b->rd[b->sub].n; i++)
-			regs[i] = mbm_reg(&b->m, i);
-		mbp_take_read(BUS_PROF(b), d->ch, &b->rd[b->sub], regs, b->val);
+		if (b->sub < nrd) {
+			for (unsigned i = 0; i < rd[b->sub].n; i++)
+				regs[i] = mbm_reg(&b->m, i);
+			mbp_take_read(BUS_PROF(b), d->ch, &rd[b->sub], regs, b->val);
+		}
 		b->sub++;
 		break;
 	}
@@ -476,8 +477,13 @@ void mbd_poll(mbd_bus_t *b, uint32_t now_us)
 	if (b->m.state != ST_IDLE || b->nd == 0)
 		return;
 	mbd_drive_t *d = &b->d[b->cur];
+	/* The sample's reads of this drive, planned here once, where a board's
+	 * constant profile folds them (MBD_PROFILE): issue() reaches them only
+	 * on the drive whose speed write or read step_done() took. */
+	mbp_read_t rd[3];
+	unsigned nrd = mbp_read_plan(BUS_PROF(b), d->ch, MBM_READ_MAX, rd);
 	if (r == MBM_OK)
-		step_done(b, d);
+		step_done(b, d, rd, nrd);
 	else if (r != MBM_BUSY && !step_failed(b, d, r, now_us))
 		b->step = DS_NONE;
 	if (b->step == DS_NONE && !next_drive(b, now_us))
@@ -485,7 +491,7 @@ void mbd_poll(mbd_bus_t *b, uint32_t now_us)
 	d = &b->d[b->cur];
 	/* a silent drive gets one attempt a probe */
 	b->m.retries = d->silent ? 0 : b->retries;
-	if (!issue(b, d)) {
+	if (!issue(b, d, rd, nrd)) {
 		publish(b, d, now_us);
 		b->step = DS_NONE;
 	}

@@ -164,8 +164,6 @@ typedef struct {
 	uint32_t comm_timeout_ms; /* 0: the drives' own stop is not set */
 	mbd_drive_t d[MBD_DRIVES];
 	uint8_t nd, cur, step, sub, retries;
-	uint8_t nrd;	  /* reads of the sample under way */
-	mbp_read_t rd[3]; /* the current drive's sample reads */
 	uint16_t val[MBP_REG_COUNT][2];
 } mbd_bus_t;
 

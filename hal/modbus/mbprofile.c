@@ -353,19 +353,18 @@ unsigned mbp_read_plan(const mb_profile_t *p, unsigned ch, unsigned max, mbp_rea
 		}
 		it[j] = x;
 	}
-	for (unsigned i = 0; i < n;) {
-		unsigned j = i, end = (unsigned)(it[i].addr + it[i].n);
-		while (j + 1 < n && it[j + 1].input == it[i].input &&
-		       (unsigned)(it[j + 1].addr + it[j + 1].n - it[i].addr) <= block) {
-			j++;
-			unsigned e = (unsigned)(it[j].addr + it[j].n);
-			end = e > end ? e : end;
+	/* each joins the read before it when that read's area is its own and
+	 * the block spans both, else starts one; unrolled as the sort */
+#pragma GCC unroll 3
+	for (unsigned k = 0; k < n; k++) {
+		if (out && rd[out - 1].input == it[k].input &&
+		    (unsigned)(it[k].addr + it[k].n - rd[out - 1].addr) <= block) {
+			unsigned end = (unsigned)(it[k].addr + it[k].n) - rd[out - 1].addr;
+			if (end > rd[out - 1].n)
+				rd[out - 1].n = (uint8_t)end;
+		} else {
+			rd[out++] = it[k];
 		}
-		rd[out].addr = it[i].addr;
-		rd[out].n = (uint8_t)(end - it[i].addr);
-		rd[out].input = it[i].input;
-		out++;
-		i = j + 1;
 	}
 	return out;
 }
