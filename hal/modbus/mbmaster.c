@@ -73,36 +73,36 @@ static size_t put_crc(uint8_t *f, size_t n)
 	return n + 2;
 }
 
-static size_t put_head(uint8_t *f, uint8_t unit, uint8_t fc, uint16_t addr, uint16_t v)
+/* A request's frame: unit, function, address, then a read's count (03,
+ * 04), one register's value (06), or a pair's count, byte count and words
+ * (16); its length with the CRC. */
+static size_t frame(uint8_t *f, uint8_t unit, uint8_t fc, uint16_t addr, uint8_t n,
+		    const uint16_t *w)
 {
+	uint16_t v = fc == 6 ? w[0] : n;
+	size_t k = 6;
 	f[0] = unit;
 	f[1] = fc;
 	f[2] = (uint8_t)(addr >> 8);
 	f[3] = (uint8_t)(addr & 0xFFu);
 	f[4] = (uint8_t)(v >> 8);
 	f[5] = (uint8_t)(v & 0xFFu);
-	return 6;
-}
-
-/* A write of n (1 or 2) registers: 06, or 16 for a pair. */
-static size_t frame_write(uint8_t *f, uint8_t unit, uint16_t addr, uint8_t n, const uint16_t *w)
-{
-	if (n == 1)
-		return put_crc(f, put_head(f, unit, 6, addr, w[0]));
-	size_t k = put_head(f, unit, 16, addr, n);
-	f[k++] = (uint8_t)(2u * n);
-	for (unsigned i = 0; i < n; i++) {
-		f[k++] = (uint8_t)(w[i] >> 8);
-		f[k++] = (uint8_t)(w[i] & 0xFFu);
+	if (fc == 16) {
+		f[k++] = (uint8_t)(2u * n);
+		for (unsigned i = 0; i < n; i++) {
+			f[k++] = (uint8_t)(w[i] >> 8);
+			f[k++] = (uint8_t)(w[i] & 0xFFu);
+		}
 	}
 	return put_crc(f, k);
 }
 
-static bool start(mbm_t *m, size_t len)
+/* A write of n (1 or 2) registers: 06, or 16 for a pair. */
+#define WRITE_FC(n) ((uint8_t)((n) == 1 ? 6 : 16))
+
+static bool request(mbm_t *m, uint8_t unit, uint8_t fc, uint16_t addr, uint8_t n, const uint16_t *w)
 {
-	m->txn = (uint8_t)len;
-	m->unit = m->tx[0];
-	m->fc = m->tx[1];
+	m->txn = (uint8_t)frame(m->tx, unit, fc, addr, n, w);
 	m->attempt = 0;
 	m->quiet_us = m->gap_us;
 	m->state = ST_GAP;
@@ -113,14 +113,14 @@ bool mbm_read(mbm_t *m, uint8_t unit, bool input, uint16_t addr, uint8_t n)
 {
 	if (m->state != ST_IDLE || n == 0 || n > MBM_READ_MAX)
 		return false;
-	return start(m, put_crc(m->tx, put_head(m->tx, unit, input ? 4 : 3, addr, n)));
+	return request(m, unit, input ? 4 : 3, addr, n, NULL);
 }
 
 bool mbm_write(mbm_t *m, uint8_t unit, uint16_t addr, uint8_t n, const uint16_t *w)
 {
 	if (m->state != ST_IDLE || n == 0 || n > 2)
 		return false;
-	return start(m, frame_write(m->tx, unit, addr, n, w));
+	return request(m, unit, WRITE_FC(n), addr, n, w);
 }
 
 static bool crc_ok(const uint8_t *rx, size_t len)
@@ -177,21 +177,21 @@ uint16_t mbm_reg(const mbm_t *m, unsigned i)
 /* The attempt ended with r: counted; retried, or the request's result. */
 static uint8_t end_attempt(mbm_t *m, uint8_t r)
 {
+	/* each failure's counter, from MBM_NO_REPLY on */
+	static const uint8_t counter[] = {
+	    offsetof(mbm_count_t, timeouts), offsetof(mbm_count_t, timeouts),
+	    offsetof(mbm_count_t, crc_errors), offsetof(mbm_count_t, bad),
+	    offsetof(mbm_count_t, exceptions)};
+	_Static_assert(MBM_EXCEPTION - MBM_NO_REPLY == sizeof counter - 1, "a counter a failure");
 	mbm_count_t *c = &m->cnt;
-	if (r == MBM_NO_REPLY || r == MBM_CUT)
-		c->timeouts++;
-	else if (r == MBM_CRC)
-		c->crc_errors++;
-	else if (r == MBM_BAD)
-		c->bad++;
-	else if (r == MBM_EXCEPTION) {
-		c->exceptions++;
+	bool illegal = r == MBM_EXCEPTION && (m->exc == 1 || m->exc == 2);
+	if (r != MBM_OK)
+		(*(uint32_t *)((char *)c + counter[r - MBM_NO_REPLY]))++;
+	if (r == MBM_EXCEPTION) {
 		c->busy += m->exc == 6;
-		c->illegal += m->exc == 1 || m->exc == 2;
+		c->illegal += illegal;
 	}
-	bool final = r == MBM_OK || m->attempt >= m->retries ||
-		     (r == MBM_EXCEPTION && (m->exc == 1 || m->exc == 2));
-	if (final) {
+	if (r == MBM_OK || illegal || m->attempt >= m->retries) {
 		m->state = ST_IDLE;
 		return r;
 	}
@@ -500,9 +500,11 @@ void mbd_poll(mbd_bus_t *b, uint32_t now_us)
 void mbd_set_velocity(void *ctx, uint8_t axis, int32_t cps_q8)
 {
 	mbd_drive_t *d = &((mbd_bus_t *)ctx)->d[axis];
-	/* counts/s, rounded to nearest */
-	int32_t cps = (int32_t)(((int64_t)cps_q8 + (cps_q8 >= 0 ? 128 : -128)) / 256);
-	d->cmd_cps = d->reverse ? -cps : cps; /* within +-2^23 */
+	/* counts/s, rounded to nearest (halves away from zero), on the
+	 * magnitude: 32-bit, no 64-bit division */
+	uint32_t mag = cps_q8 < 0 ? 0u - (uint32_t)cps_q8 : (uint32_t)cps_q8;
+	int32_t cps = (int32_t)((mag + 128u) >> 8);
+	d->cmd_cps = (cps_q8 < 0) != d->reverse ? -cps : cps; /* within +-2^23 */
 }
 
 void mbd_enable(void *ctx, uint8_t axis, bool on)
@@ -529,5 +531,5 @@ size_t mbd_off_frame(const mbd_bus_t *b, unsigned i, uint8_t *f)
 	const mbp_reg_t *g = &BUS_PROF(b)->reg[MBP_ENABLE];
 	uint16_t w[2];
 	mbp_put(g, BUS_PROF(b)->enable_off, w);
-	return frame_write(f, b->d[i].unit, mbp_addr(g, b->d[i].ch), g->words, w);
+	return frame(f, b->d[i].unit, WRITE_FC(g->words), mbp_addr(g, b->d[i].ch), g->words, w);
 }

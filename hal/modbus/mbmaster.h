@@ -91,10 +91,8 @@ typedef struct {
 	uint32_t gap_us, timeout_us, byte_us;
 	uint32_t quiet_us; /* silence before the next attempt: gap, or byte_us after a failure */
 	uint8_t retries;
-	uint8_t state, attempt, result, exc;
-	/* the request, for checking its reply */
-	uint8_t unit, fc, n;
-	uint16_t addr;
+	uint8_t state, attempt, exc;
+	/* the request's bytes (its reply is checked against tx), the reply's */
 	uint8_t txn, rxn;
 	uint32_t t_line; /* last byte on the line, or the start of the wait */
 	uint8_t tx[MBM_ADU_MAX];
