@@ -3,6 +3,7 @@
 
 #include "board.h"
 #include "plant.h"
+#include "proto/fmt.h"
 
 typedef struct {
 	volatile uint32_t load, value, ctrl, intclr, ris, mis;
@@ -46,27 +47,20 @@ uint32_t wdog_reset_cause(uint32_t *pc)
 	return c;
 }
 
-static size_t put(char *b, size_t cap, size_t k, const char *s)
-{
-	while (*s && k + 1 < cap)
-		b[k++] = *s++;
-	b[k] = '\0';
-	return k;
-}
-
 size_t wdog_restart_text(char *buf, size_t cap)
 {
 	uint32_t pc = 0, c = wdog_reset_cause(&pc);
 	if (c != WDOG_CAUSE_WATCHDOG && c != WDOG_CAUSE_HARDFAULT)
 		return 0;
-	char hex[11] = "0x";
-	for (unsigned i = 0; i < 8; i++)
-		hex[2 + i] = "0123456789abcdef"[(pc >> (28 - 4 * i)) & 0xFu];
-	hex[10] = '\0';
-	size_t k = put(buf, cap, 0,
-		       c == WDOG_CAUSE_WATCHDOG ? "reset by the watchdog at "
-						: "reset by a HardFault at ");
-	return put(buf, cap, k, hex);
+	size_t n =
+	    fmt_print(buf, cap, "reset by %s at 0x%08X",
+		      c == WDOG_CAUSE_WATCHDOG ? "the watchdog" : "a HardFault", (unsigned)pc);
+	size_t end = n < cap ? n : cap ? cap - 1u : 0u;
+	/* the console's hexadecimal is upper-case: the address's 8 digits
+	 * lowered (a digit has that bit set already) */
+	for (size_t i = n - 8u; i < end; i++)
+		buf[i] = (char)(buf[i] | 0x20);
+	return end;
 }
 
 /* Both handlers: the drives off first, then the record. sp: the exception
