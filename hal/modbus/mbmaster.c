@@ -131,39 +131,35 @@ static bool crc_ok(const uint8_t *rx, size_t len)
 
 uint8_t mbm_check(const uint8_t *tx, const uint8_t *rx, size_t n, uint8_t *exc)
 {
+	uint8_t fc = tx[1];
+	bool read = fc == 3 || fc == 4;
+	size_t len = 8; /* 06 and 16 echo the address and the value or count */
 	if (n == 0)
 		return MBM_MORE;
 	if (rx[0] != tx[0])
 		return MBM_BAD;
 	if (n < 2)
 		return MBM_MORE;
-	uint8_t fc = tx[1];
 	if (rx[1] == (fc | 0x80u)) {
-		if (n < 5)
-			return MBM_MORE;
-		if (!crc_ok(rx, 5))
-			return MBM_CRC;
-		*exc = rx[2];
-		return MBM_EXCEPTION;
-	}
-	if (rx[1] != fc)
+		len = 5;
+	} else if (rx[1] != fc) {
 		return MBM_BAD;
-	if (fc == 3 || fc == 4) {
+	} else if (read) {
 		if (n < 3)
 			return MBM_MORE;
 		if (rx[2] != 2u * tx[5] || tx[4] != 0)
 			return MBM_BAD;
-		size_t len = 5u + rx[2];
-		if (n < len)
-			return MBM_MORE;
-		return crc_ok(rx, len) ? MBM_OK : MBM_CRC;
+		len = 5u + rx[2];
 	}
-	/* 06 and 16 echo the address and the value or count */
-	if (n < 8)
+	if (n < len)
 		return MBM_MORE;
-	if (!crc_ok(rx, 8))
+	if (!crc_ok(rx, len))
 		return MBM_CRC;
-	for (unsigned i = 2; i < 6; i++)
+	if (rx[1] != fc) { /* fc | 0x80 */
+		*exc = rx[2];
+		return MBM_EXCEPTION;
+	}
+	for (unsigned i = 2; i < 6 && !read; i++)
 		if (rx[i] != tx[i])
 			return MBM_BAD;
 	return MBM_OK;
