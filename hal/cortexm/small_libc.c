@@ -3,6 +3,7 @@
  * lines (tens of bytes), where the unrolled forms buy little and cost
  * about 1.5 KiB of flash. The linker takes these before
  * the library's. */
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <string.h>
@@ -89,14 +90,29 @@ size_t strnlen(const char *s, size_t max)
 	return n;
 }
 
-size_t strcspn(const char *s, const char *reject)
+/* strspn and strcspn in one (newlib's strspn is 48 bytes): the length of
+ * s's start whose characters are all in set (in), or none of them (!in). */
+static size_t span(const char *s, const char *set, bool in)
 {
 	size_t n = 0;
-	for (; s[n]; n++)
-		for (const char *r = reject; *r; r++)
-			if (s[n] == *r)
-				return n;
+	for (; s[n]; n++) {
+		const char *r = set;
+		while (*r && *r != s[n])
+			r++;
+		if ((*r != '\0') != in)
+			break;
+	}
 	return n;
+}
+
+size_t strspn(const char *s, const char *accept)
+{
+	return span(s, accept, true);
+}
+
+size_t strcspn(const char *s, const char *reject)
+{
+	return span(s, reject, false);
 }
 
 NO_LOOP_CALLS void *memmove(void *dst, const void *src, size_t n)
