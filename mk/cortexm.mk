@@ -74,7 +74,7 @@ MCU_DEFS += -DVS_MAX_IO=8
 # The Modbus master reads the board's compiled-in drive profile as constants
 # (hal/modbus/mbmaster.c): 472 bytes less on the M4 (68,808 -> 68,336).
 MCU_DEFS += $(if $(filter modbus,$(MCU_DRIVES)),-DMBD_PROFILE=board_mb_profile)
-# And calls its port's functions directly (MBM_PORT_DIRECT, hal/modbus/mbmaster.h): 92 bytes less.
+# And calls its port's functions directly (MBM_PORT_DIRECT, hal/modbus/mbmaster.h): 60 bytes less.
 MCU_DEFS += $(if $(filter modbus,$(MCU_DRIVES)),-DMBM_PORT_DIRECT)
 # Link-time optimisation: inlining and dead-code removal across files saves
 # a tenth of the flash (49.4 KiB -> 44.5 KiB when it was brought in). Fat
