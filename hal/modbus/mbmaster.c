@@ -526,6 +526,7 @@ size_t mbd_off_frame(const mbd_bus_t *b, unsigned i, uint8_t *f)
 {
 	const mbp_reg_t *g = &BUS_PROF(b)->reg[MBP_ENABLE];
 	uint16_t w[2];
+	uint8_t n = g->words == 2 ? 2 : 1; /* mbp_put's words */
 	mbp_put(g, BUS_PROF(b)->enable_off, w);
-	return frame(f, b->d[i].unit, WRITE_FC(g->words), mbp_addr(g, b->d[i].ch), g->words, w);
+	return frame(f, b->d[i].unit, WRITE_FC(n), mbp_addr(g, b->d[i].ch), n, w);
 }
